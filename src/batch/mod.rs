@@ -1,0 +1,1 @@
+//! Batch processing of shot folders: parallel measurement, summary table, resumable runs.

@@ -1,0 +1,68 @@
+//! Command-line front end: argument definitions per subcommand, and the
+//! mapping of library errors to one clear line and a documented exit code.
+
+use clap::{Parser, Subcommand};
+
+mod batch;
+mod chart;
+mod exit;
+mod measure;
+mod model;
+mod simulate;
+
+pub use exit::{CliError, Code};
+
+/// Measure and model camera MTF with sine-sweep charts.
+#[derive(Debug, Parser)]
+#[command(name = "sweepmtf", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Measure the MTF from a photograph of a sine chart.
+    Measure(measure::Args),
+    /// Generate a printable sweep or sine-patch chart and its description.
+    Chart(chart::Args),
+    /// Measure every photo in one or more folders.
+    Batch(batch::Args),
+    /// Join the summaries of several batch output folders.
+    Merge(batch::MergeArgs),
+    /// Evaluate the theoretical MTF of optics and sensor.
+    Model(model::Args),
+    /// Render a target through a modelled camera, with the exact truth.
+    Simulate(simulate::Args),
+}
+
+/// Parses the command line, runs the subcommand and returns the exit code.
+pub fn main() -> std::process::ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return match e.kind() {
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                    std::process::ExitCode::SUCCESS
+                }
+                _ => Code::Usage.into(),
+            };
+        }
+    };
+    let result = match &cli.command {
+        Command::Measure(a) => measure::run(a),
+        Command::Chart(a) => chart::run(a),
+        Command::Batch(a) => batch::run(a),
+        Command::Merge(a) => batch::run_merge(a),
+        Command::Model(a) => model::run(a),
+        Command::Simulate(a) => simulate::run(a),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("sweepmtf: {}", e.message);
+            e.code.into()
+        }
+    }
+}

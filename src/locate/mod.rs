@@ -1,0 +1,1 @@
+//! Finding the chart in a photo: fiducial detection and corner refinement.

@@ -1,0 +1,1 @@
+//! Photo decoding (JPEG, PNG, TIFF, camera raw), EXIF facts and linearisation to linear light.

@@ -1,0 +1,1 @@
+//! Writing results: CSV, JSON summaries and plots, atomically.

@@ -1,0 +1,1 @@
+//! Camera simulator: renders a target through a modelled camera and writes the exact truth.
