@@ -322,9 +322,10 @@ impl Target {
     /// Checks sizes, ranges and that every region lies inside the target.
     pub fn validate(&self) -> Result<(), TargetError> {
         let bad = |m: String| Err(TargetError::Invalid(m));
-        if !(self.width_mm > 0.0 && self.height_mm > 0.0)
-            || !self.width_mm.is_finite()
-            || !self.height_mm.is_finite()
+        if !(self.width_mm > 0.0
+            && self.height_mm > 0.0
+            && self.width_mm.is_finite()
+            && self.height_mm.is_finite())
         {
             return bad(format!(
                 "target size {}×{} mm must be positive",
@@ -362,7 +363,7 @@ impl Target {
                     p.id
                 ));
             }
-            if !(p.freq_cy_mm > 0.0 && p.freq_cy_mm.is_finite()) || !mod_ok(p.contrast) {
+            if !(p.freq_cy_mm > 0.0 && p.freq_cy_mm.is_finite() && mod_ok(p.contrast)) {
                 return bad(format!(
                     "patch '{}': need frequency > 0 and contrast in (0, 1]",
                     p.id
