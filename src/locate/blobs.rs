@@ -1,0 +1,261 @@
+//! Dark-blob detection on the search image: pixels darker than 60 % of their
+//! neighbourhood's mean (a box window about the size of the largest expected
+//! fiducial, so vignetting and gradients cancel) are grouped into connected
+//! components; those of plausible size and aspect are tested along 32 rays:
+//! the dark→white edge must lie on one ellipse (the image of a disk) and the
+//! surround must be uniformly white (the fiducial's white square). Each test
+//! result is kept as a [`Candidate`] for the debug picture.
+
+use super::Candidate;
+use super::sample::Gray;
+use crate::geometry::Point;
+use rayon::prelude::*;
+
+/// Number of rays used to test a blob's outline.
+pub const RAYS: usize = 32;
+/// A pixel is dark when below this fraction of its neighbourhood's mean.
+pub const DARK_FRACTION: f32 = 0.6;
+/// Smallest blob considered (search-image samples).
+pub const MIN_AREA: usize = 7;
+
+/// A component's raw statistics (grid coordinates of the search image).
+#[derive(Debug, Clone, Copy)]
+struct Comp {
+    n: usize,
+    sx: f64,
+    sy: f64,
+    sxx: f64,
+    syy: f64,
+    sxy: f64,
+    touches_border: bool,
+}
+
+/// The blobs of the search image, each tested for being a fiducial (image px).
+pub fn find_candidates(g: &Gray<'_>) -> Vec<Candidate> {
+    let dark = dark_mask(g);
+    let comps = components(&dark, g.w, g.h);
+    let short = g.w.min(g.h) as f64;
+    let max_area = (0.25 * short).powi(2);
+    comps
+        .par_iter()
+        .filter(|c| c.n >= MIN_AREA && (c.n as f64) <= max_area && !c.touches_border)
+        .filter_map(|c| test_blob(g, c))
+        .collect()
+}
+
+/// Dark mask: value < DARK_FRACTION × box mean over a window of side ≈ 15 % of the short side.
+fn dark_mask(g: &Gray<'_>) -> Vec<bool> {
+    let (w, h) = (g.w, g.h);
+    let r = ((0.07 * w.min(h) as f64).round() as usize).clamp(4, 200);
+    // Integral image, (w+1)×(h+1).
+    let mut ii = vec![0.0f64; (w + 1) * (h + 1)];
+    for j in 0..h {
+        let mut run = 0.0f64;
+        for i in 0..w {
+            run += g.data[j * w + i] as f64;
+            ii[(j + 1) * (w + 1) + i + 1] = ii[j * (w + 1) + i + 1] + run;
+        }
+    }
+    let mut mask = vec![false; w * h];
+    mask.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
+        let y0 = j.saturating_sub(r);
+        let y1 = (j + r + 1).min(h);
+        for (i, m) in row.iter_mut().enumerate() {
+            let x0 = i.saturating_sub(r);
+            let x1 = (i + r + 1).min(w);
+            let s = ii[y1 * (w + 1) + x1] - ii[y0 * (w + 1) + x1] - ii[y1 * (w + 1) + x0]
+                + ii[y0 * (w + 1) + x0];
+            let mean = s / ((x1 - x0) * (y1 - y0)) as f64;
+            *m = (g.data[j * w + i] as f64) < DARK_FRACTION as f64 * mean;
+        }
+    });
+    mask
+}
+
+/// 8-connected components of the mask.
+fn components(mask: &[bool], w: usize, h: usize) -> Vec<Comp> {
+    let mut seen = vec![false; w * h];
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..w * h {
+        if !mask[start] || seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        stack.push(start);
+        let mut c = Comp {
+            n: 0,
+            sx: 0.0,
+            sy: 0.0,
+            sxx: 0.0,
+            syy: 0.0,
+            sxy: 0.0,
+            touches_border: false,
+        };
+        while let Some(p) = stack.pop() {
+            let (i, j) = (p % w, p / w);
+            let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+            c.n += 1;
+            c.sx += x;
+            c.sy += y;
+            c.sxx += x * x;
+            c.syy += y * y;
+            c.sxy += x * y;
+            if i == 0 || j == 0 || i + 1 == w || j + 1 == h {
+                c.touches_border = true;
+            }
+            for dj in -1i64..=1 {
+                for di in -1i64..=1 {
+                    let (ni, nj) = (i as i64 + di, j as i64 + dj);
+                    if ni < 0 || nj < 0 || ni >= w as i64 || nj >= h as i64 {
+                        continue;
+                    }
+                    let q = nj as usize * w + ni as usize;
+                    if mask[q] && !seen[q] {
+                        seen[q] = true;
+                        stack.push(q);
+                    }
+                }
+            }
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The ray test of one blob; `None` when its statistics already rule it out.
+fn test_blob(g: &Gray<'_>, c: &Comp) -> Option<Candidate> {
+    let n = c.n as f64;
+    let (mx, my) = (c.sx / n, c.sy / n);
+    // Pixel-area moments (+1/12 for the extent of each square sample).
+    let cxx = c.sxx / n - mx * mx + 1.0 / 12.0;
+    let cyy = c.syy / n - my * my + 1.0 / 12.0;
+    let cxy = c.sxy / n - mx * my;
+    let det = cxx * cyy - cxy * cxy;
+    if det <= 0.0 {
+        return None;
+    }
+    let tr = cxx + cyy;
+    let disc = ((cxx - cyy).powi(2) / 4.0 + cxy * cxy).sqrt();
+    let (l1, l2) = (tr / 2.0 + disc, tr / 2.0 - disc);
+    if l2 <= 0.0 || (l2 / l1).sqrt() < 0.3 {
+        return None;
+    }
+    let fill = n / (4.0 * std::f64::consts::PI * det.sqrt());
+    if !(0.45..=1.3).contains(&fill) {
+        return None;
+    }
+    let t = ray_test(g, [mx, my], [cxx, cxy, cyy])?;
+    let s = g.scale;
+    let cov_img = [
+        t.cov[0] * s[0] * s[0],
+        t.cov[1] * s[0] * s[1],
+        t.cov[2] * s[1] * s[1],
+    ];
+    Some(Candidate {
+        centre_px: g.to_img([mx, my]),
+        cov_px2: cov_img,
+        ring_score: t.ring_score,
+        contrast: t.contrast,
+        disk_like: t.disk_like,
+        used: false,
+    })
+}
+
+/// What the rays saw around a blob.
+#[derive(Debug, Clone, Copy)]
+pub struct RayTest {
+    /// Covariance of the equivalent solid ellipse whose edge is at the measured edge (grid units²).
+    pub cov: [f64; 3],
+    /// Centre brightness between dark (0) and white (1).
+    pub ring_score: f64,
+    /// (white − dark)/white.
+    pub contrast: f64,
+    /// Median dark and white levels.
+    pub dark: f64,
+    /// Median white level of the surround.
+    pub white: f64,
+    /// Passed: round outline and uniform white surround.
+    pub disk_like: bool,
+}
+
+/// Casts [`RAYS`] rays from `centre` (grid units) across an ellipse of covariance `cov`
+/// (edge at 2σ) and tests whether the dark→white edge is elliptical with a white surround.
+pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
+    let [cxx, cxy, cyy] = cov;
+    let det = cxx * cyy - cxy * cxy;
+    let (ixx, ixy, iyy) = (cyy / det, -cxy / det, cxx / det);
+    let mut q = [0.0f64; RAYS];
+    let mut whites = [0.0f64; RAYS];
+    let mut darks = [0.0f64; RAYS];
+    let mut centre_v = 0.0f64;
+    let mut centre_n = 0.0f64;
+    let mut rho_sum = 0.0;
+    let mut prof = Vec::with_capacity(256);
+    for k in 0..RAYS {
+        let a = 2.0 * std::f64::consts::PI * k as f64 / RAYS as f64;
+        let (ux, uy) = (a.cos(), a.sin());
+        let rho = 2.0 / (ux * ux * ixx + 2.0 * ux * uy * ixy + uy * uy * iyy).sqrt();
+        rho_sum += rho;
+        let step = (rho / 24.0).min(0.25);
+        let m = (1.95 * rho / step).ceil() as usize + 1;
+        prof.clear();
+        for i in 0..m {
+            let t = i as f64 * step;
+            prof.push(g.bilinear([centre[0] + t * ux, centre[1] + t * uy])?);
+        }
+        let idx = |t: f64| ((t / step).round() as usize).min(m - 1);
+        let (w0, w1) = (idx(1.35 * rho), idx(1.9 * rho));
+        let white = prof[w0..=w1].iter().sum::<f64>() / (w1 - w0 + 1) as f64;
+        let dark = prof[..=idx(rho)]
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
+        let thr = 0.5 * (dark + white);
+        let mut e = None;
+        for i in (0..idx(1.35 * rho)).rev() {
+            if prof[i] < thr {
+                let (p0, p1) = (prof[i], prof[i + 1]);
+                let f = if p1 > p0 { (thr - p0) / (p1 - p0) } else { 0.5 };
+                e = Some((i as f64 + f.clamp(0.0, 1.0)) * step);
+                break;
+            }
+        }
+        q[k] = e? / rho;
+        whites[k] = white;
+        darks[k] = dark;
+        for (i, &v) in prof.iter().enumerate() {
+            if (i as f64) * step <= 0.15 * rho {
+                centre_v += v;
+                centre_n += 1.0;
+            }
+        }
+    }
+    let med = |v: &mut [f64]| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut ws = whites;
+    let mut ds = darks;
+    let white = med(&mut ws);
+    let dark = med(&mut ds);
+    let span = white - dark;
+    if span <= 0.0 || white <= 0.0 {
+        return None;
+    }
+    let contrast = span / white;
+    let qm = q.iter().sum::<f64>() / RAYS as f64;
+    let qsd = (q.iter().map(|v| (v - qm).powi(2)).sum::<f64>() / RAYS as f64).sqrt();
+    let rho_mean = rho_sum / RAYS as f64 * qm;
+    let round = qsd / qm <= 0.05 + 0.35 / rho_mean.max(1.0);
+    let uniform = whites.iter().all(|&w| w >= dark + 0.7 * span);
+    let ring_score = ((centre_v / centre_n.max(1.0)) - dark) / span;
+    Some(RayTest {
+        cov: [cxx * qm * qm, cxy * qm * qm, cyy * qm * qm],
+        ring_score,
+        contrast,
+        dark,
+        white,
+        disk_like: round && uniform && contrast >= 0.35,
+    })
+}

@@ -1,0 +1,154 @@
+//! Automatic chart location on rendered shots with known truth (test-only
+//! renderer in `locate_support`): corner accuracy, one hidden fiducial,
+//! several charts, distractors.
+
+mod locate_support;
+
+use locate_support::*;
+use sweepmtf::geometry::{Homography, Point};
+use sweepmtf::locate;
+
+fn out_dir() -> std::path::PathBuf {
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("locate");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn corner_err(a: &[Point; 4], b: &[Point; 4]) -> [f64; 4] {
+    [0, 1, 2, 3].map(|i| (a[i][0] - b[i][0]).hypot(a[i][1] - b[i][1]))
+}
+
+#[test]
+fn finds_a_tilted_chart_to_sub_pixel() {
+    let t = test_target(200.0, 140.0);
+    let (w, h) = (800, 600);
+    let mut rng = Rng(7);
+    let hom = Homography::from_quads(
+        &sweepmtf::geometry::rect_corners(0.0, 0.0, 200.0, 140.0),
+        &[[120.0, 90.0], [690.0, 140.0], [650.0, 520.0], [90.0, 470.0]],
+    )
+    .unwrap();
+    let look = Look {
+        vignette: 0.3,
+        gradient: [0.3, -0.2],
+        noise: [0.005, 0.01],
+        distractors: vec![([40.0, 40.0], 9.0, false), ([760.0, 560.0], 8.0, true)],
+        ..Look::default()
+    };
+    let plane = render(&[(&t, hom)], w, h, &look, &mut rng);
+    save_plane(&plane, &out_dir().join("tilted.png"));
+    let s = locate::search(&plane, &t).unwrap();
+    locate::debug_image(&plane, &s.candidates, &s.charts)
+        .save(out_dir().join("tilted.roi.png"))
+        .unwrap();
+    assert_eq!(s.charts.len(), 1, "{:?}", s.candidates);
+    let c = &s.charts[0];
+    let e = corner_err(&c.corners_px, &true_corners(&t, &hom));
+    assert!(e.iter().all(|&v| v < 0.3), "corner errors {e:?}");
+    assert_eq!(c.hidden, None);
+    assert_eq!(c.fiducials.len(), 4);
+}
+
+/// Statistics of a pose sweep.
+struct SweepStats {
+    shots: usize,
+    found: usize,
+    false_found: usize,
+    errs: Vec<f64>,
+}
+
+fn pose_sweep(n: usize, seed: u64, w: usize, h: usize) -> SweepStats {
+    let t = test_target(200.0, 140.0);
+    let mut rng = Rng(seed);
+    let mut st = SweepStats {
+        shots: n,
+        found: 0,
+        false_found: 0,
+        errs: vec![],
+    };
+    for k in 0..n {
+        let coverage = rng.range(0.1, 0.95).sqrt();
+        let hom = random_pose(&t, w, h, 45.0, coverage, &mut rng);
+        let inv = hom.inverse().unwrap();
+        let mut distractors = vec![];
+        for _ in 0..(rng.uniform() * 4.0) as usize {
+            let c = [rng.range(0.0, w as f64), rng.range(0.0, h as f64)];
+            let q = inv.apply(c);
+            let m = 30.0;
+            let near = q[0] > -m && q[1] > -m && q[0] < t.width_mm + m && q[1] < t.height_mm + m;
+            let behind = !q[0].is_finite() || inv.m[6] * c[0] + inv.m[7] * c[1] + inv.m[8] <= 0.0;
+            if !near && !behind {
+                distractors.push((c, rng.range(3.0, 12.0), rng.uniform() < 0.5));
+            }
+        }
+        let look = Look {
+            blur_px: rng.range(0.4, 1.2),
+            vignette: rng.range(0.0, 0.4),
+            gradient: [rng.range(-0.3, 0.3), rng.range(-0.3, 0.3)],
+            gain: rng.range(0.5, 1.0),
+            noise: [rng.range(0.0, 0.01), rng.range(0.0, 0.02)],
+            surround: rng.range(0.1, 0.6),
+            distractors,
+            ..Look::default()
+        };
+        let plane = render(&[(&t, hom)], w, h, &look, &mut rng);
+        let truth = true_corners(&t, &hom);
+        match locate::search(&plane, &t) {
+            Ok(s) if !s.charts.is_empty() => {
+                let e = corner_err(&s.charts[0].corners_px, &truth);
+                if e.iter().any(|&v| v > 5.0) {
+                    st.false_found += 1;
+                    eprintln!("shot {k}: wrong chart, errors {e:?}");
+                    let _ = locate::debug_image(&plane, &s.candidates, &s.charts)
+                        .save(out_dir().join(format!("sweep{k}.roi.png")));
+                } else {
+                    st.found += 1;
+                    st.errs.extend(e);
+                }
+            }
+            Ok(s) => {
+                eprintln!("shot {k}: not found (coverage {coverage:.2})");
+                let _ = locate::debug_image(&plane, &s.candidates, &s.charts)
+                    .save(out_dir().join(format!("sweep{k}.roi.png")));
+                save_plane(&plane, &out_dir().join(format!("sweep{k}.png")));
+            }
+            Err(e) => panic!("shot {k}: {e}"),
+        }
+    }
+    st
+}
+
+fn report(st: &SweepStats) -> (f64, f64) {
+    let rms = (st.errs.iter().map(|e| e * e).sum::<f64>() / st.errs.len().max(1) as f64).sqrt();
+    let max = st.errs.iter().cloned().fold(0.0, f64::max);
+    eprintln!(
+        "pose sweep: {} shots, found {} ({:.1} %), wrong {}, corner error RMS {:.3} px, max {:.3} px",
+        st.shots,
+        st.found,
+        100.0 * st.found as f64 / st.shots as f64,
+        st.false_found,
+        rms,
+        max
+    );
+    (rms, max)
+}
+
+#[test]
+fn random_poses_small_sweep() {
+    let st = pose_sweep(16, 11, 640, 480);
+    let (rms, _) = report(&st);
+    assert_eq!(st.false_found, 0);
+    assert!(st.found >= 15, "found {} of {}", st.found, st.shots);
+    assert!(rms <= 0.5, "corner RMS {rms}");
+}
+
+/// The full bar: 200 shots (run with `cargo test --release --test locate_find -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn random_poses_200_shots() {
+    let st = pose_sweep(200, 2026, 640, 480);
+    let (rms, _) = report(&st);
+    assert_eq!(st.false_found, 0);
+    assert!(st.found as f64 >= 0.95 * st.shots as f64);
+    assert!(rms <= 0.5, "corner RMS {rms}");
+}
