@@ -16,8 +16,10 @@ use crate::target::{FiducialKind, Target};
 pub const MAX_CANDIDATES: usize = 30;
 /// Least correlation between image and target pattern for a quad of four marks.
 pub const MIN_SCORE_QUAD: f64 = 0.6;
-/// Least correlation for a solution from three marks (one hidden).
+/// Least correlation for a solution from three marks (one hidden), after edge refinement.
 pub const MIN_SCORE_TRIPLE: f64 = 0.7;
+/// Least correlation for three marks under the first, affine guess.
+pub const MIN_SCORE_TRIPLE_AFFINE: f64 = 0.5;
 
 /// A choice of candidates for one chart.
 #[derive(Debug, Clone)]
@@ -249,7 +251,7 @@ fn triples(
                             &assign,
                             h,
                             Some(missing),
-                            MIN_SCORE_TRIPLE,
+                            MIN_SCORE_TRIPLE_AFFINE,
                         ) {
                             out.push(p);
                         }

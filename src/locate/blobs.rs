@@ -30,8 +30,30 @@ struct Comp {
     touches_border: bool,
 }
 
-/// The blobs of the search image, each tested for being a fiducial (image px).
+/// The blobs of the search image and of a 2× coarser copy (where small rings fill in
+/// to solid blobs), each tested for being a fiducial (image px), without duplicates.
 pub fn find_candidates(g: &Gray<'_>) -> Vec<Candidate> {
+    let mut out = find_candidates_one(g);
+    if g.w.min(g.h) >= 200 {
+        let coarse = super::downscale::box_reduce(g, 2);
+        for c in find_candidates_one(&coarse) {
+            let r = 2.0 * (c.cov_px2[0] + c.cov_px2[2]).sqrt();
+            let dup = out.iter().any(|f| {
+                (f.centre_px[0] - c.centre_px[0]).hypot(f.centre_px[1] - c.centre_px[1]) < r
+                    && (f.disk_like || !c.disk_like)
+            });
+            if !dup {
+                out.retain(|f| {
+                    (f.centre_px[0] - c.centre_px[0]).hypot(f.centre_px[1] - c.centre_px[1]) >= r
+                });
+                out.push(c);
+            }
+        }
+    }
+    out
+}
+
+fn find_candidates_one(g: &Gray<'_>) -> Vec<Candidate> {
     let dark = dark_mask(g);
     let comps = components(&dark, g.w, g.h);
     let short = g.w.min(g.h) as f64;
@@ -158,6 +180,7 @@ fn test_blob(g: &Gray<'_>, c: &Comp) -> Option<Candidate> {
         ring_score: t.ring_score,
         contrast: t.contrast,
         disk_like: t.disk_like,
+        why: t.why,
         used: false,
     })
 }
@@ -177,6 +200,8 @@ pub struct RayTest {
     pub white: f64,
     /// Passed: round outline and uniform white surround.
     pub disk_like: bool,
+    /// Why it failed ("" when it passed).
+    pub why: &'static str,
 }
 
 /// Casts [`RAYS`] rays from `centre` (grid units) across an ellipse of covariance `cov`
@@ -185,13 +210,16 @@ pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
     let [cxx, cxy, cyy] = cov;
     let det = cxx * cyy - cxy * cxy;
     let (ixx, ixy, iyy) = (cyy / det, -cxy / det, cxx / det);
-    let mut q = [0.0f64; RAYS];
-    let mut whites = [0.0f64; RAYS];
-    let mut darks = [0.0f64; RAYS];
-    let mut centre_v = 0.0f64;
-    let mut centre_n = 0.0f64;
+    // Pass 1: profiles, and the edge on each ray (white level just outside the blob).
+    struct Ray {
+        rho: f64,
+        step: f64,
+        prof: Vec<f64>,
+        dark: f64,
+        q: f64,
+    }
+    let mut rays: Vec<Ray> = Vec::with_capacity(RAYS);
     let mut rho_sum = 0.0;
-    let mut prof = Vec::with_capacity(256);
     for k in 0..RAYS {
         let a = 2.0 * std::f64::consts::PI * k as f64 / RAYS as f64;
         let (ux, uy) = (a.cos(), a.sin());
@@ -199,13 +227,19 @@ pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
         rho_sum += rho;
         let step = (rho / 24.0).min(0.25);
         let m = (1.95 * rho / step).ceil() as usize + 1;
-        prof.clear();
+        let mut prof = Vec::with_capacity(m);
         for i in 0..m {
             let t = i as f64 * step;
-            prof.push(g.bilinear([centre[0] + t * ux, centre[1] + t * uy])?);
+            match g.bilinear([centre[0] + t * ux, centre[1] + t * uy]) {
+                Some(v) => prof.push(v),
+                None => break,
+            }
+        }
+        if prof.len() < m {
+            continue; // leaves the image (a mark near the border): judge on the other rays
         }
         let idx = |t: f64| ((t / step).round() as usize).min(m - 1);
-        let (w0, w1) = (idx(1.35 * rho), idx(1.9 * rho));
+        let (w0, w1) = (idx(1.3 * rho), idx(1.6 * rho));
         let white = prof[w0..=w1].iter().sum::<f64>() / (w1 - w0 + 1) as f64;
         let dark = prof[..=idx(rho)]
             .iter()
@@ -213,7 +247,7 @@ pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
             .fold(f64::INFINITY, f64::min);
         let thr = 0.5 * (dark + white);
         let mut e = None;
-        for i in (0..idx(1.35 * rho)).rev() {
+        for i in (0..idx(1.3 * rho)).rev() {
             if prof[i] < thr {
                 let (p0, p1) = (prof[i], prof[i + 1]);
                 let f = if p1 > p0 { (thr - p0) / (p1 - p0) } else { 0.5 };
@@ -221,35 +255,60 @@ pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
                 break;
             }
         }
-        q[k] = e? / rho;
-        whites[k] = white;
-        darks[k] = dark;
-        for (i, &v) in prof.iter().enumerate() {
-            if (i as f64) * step <= 0.15 * rho {
-                centre_v += v;
-                centre_n += 1.0;
-            }
+        if let Some(e) = e {
+            rays.push(Ray {
+                rho,
+                step,
+                prof,
+                dark,
+                q: e / rho,
+            });
         }
     }
-    let med = |v: &mut [f64]| {
+    if rays.len() < RAYS * 2 / 3 {
+        return None;
+    }
+    let med = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    let mut ws = whites;
-    let mut ds = darks;
-    let white = med(&mut ws);
-    let dark = med(&mut ds);
+    let nq = rays.len() as f64;
+    let qm = rays.iter().map(|r| r.q).sum::<f64>() / nq;
+    let qsd = (rays.iter().map(|r| (r.q - qm).powi(2)).sum::<f64>() / nq).sqrt();
+    let qmed = med(rays.iter().map(|r| r.q).collect());
+    // Pass 2: the surround, 1.3–1.7 edge radii out (inside a fiducial's white square).
+    let whites: Vec<f64> = rays
+        .iter()
+        .map(|r| {
+            let m = r.prof.len();
+            let idx = |t: f64| ((t / r.step).round() as usize).min(m - 1);
+            let (w0, w1) = (idx(1.3 * qmed * r.rho), idx(1.7 * qmed * r.rho));
+            r.prof[w0..=w1].iter().sum::<f64>() / (w1 - w0 + 1) as f64
+        })
+        .collect();
+    let white = med(whites.clone());
+    let dark = med(rays.iter().map(|r| r.dark).collect());
     let span = white - dark;
     if span <= 0.0 || white <= 0.0 {
         return None;
     }
+    let (mut cv, mut cn) = (0.0, 0.0);
+    for r in &rays {
+        for (i, &v) in r.prof.iter().enumerate() {
+            if i as f64 * r.step <= 0.15 * qmed * r.rho {
+                cv += v;
+                cn += 1.0;
+            }
+        }
+    }
     let contrast = span / white;
-    let qm = q.iter().sum::<f64>() / RAYS as f64;
-    let qsd = (q.iter().map(|v| (v - qm).powi(2)).sum::<f64>() / RAYS as f64).sqrt();
     let rho_mean = rho_sum / RAYS as f64 * qm;
     let round = qsd / qm <= 0.05 + 0.35 / rho_mean.max(1.0);
-    let uniform = whites.iter().all(|&w| w >= dark + 0.7 * span);
-    let ring_score = ((centre_v / centre_n.max(1.0)) - dark) / span;
+    // At least 3/4 of the rays see white: the white square is only one mark diameter
+    // from the centre at the frame's edges, so a few rays may reach the surroundings.
+    let white_rays = whites.iter().filter(|&&w| w >= dark + 0.6 * span).count();
+    let uniform = 4 * white_rays >= 3 * whites.len();
+    let ring_score = (cv / f64::max(cn, 1.0) - dark) / span;
     Some(RayTest {
         cov: [cxx * qm * qm, cxy * qm * qm, cyy * qm * qm],
         ring_score,
@@ -257,5 +316,14 @@ pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
         dark,
         white,
         disk_like: round && uniform && contrast >= 0.35,
+        why: if !round {
+            "outline not elliptical"
+        } else if !uniform {
+            "surround not uniformly white"
+        } else if contrast < 0.35 {
+            "low contrast"
+        } else {
+            ""
+        },
     })
 }

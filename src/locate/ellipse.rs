@@ -344,12 +344,6 @@ pub fn finish(plane: &Plane, target: &Target, pick: &Pick, cands: &[Candidate]) 
     if corners.iter().flatten().any(|v| !v.is_finite()) {
         return None;
     }
-    if pick.score < 0.8 {
-        warnings.push(format!(
-            "weak agreement between image and target pattern (correlation {:.2})",
-            pick.score
-        ));
-    }
     Some(Located {
         homography: h,
         corners_px: corners,

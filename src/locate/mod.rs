@@ -74,6 +74,8 @@ pub struct Candidate {
     pub contrast: f64,
     /// Whether it passed the disk test (else it was rejected as not a fiducial).
     pub disk_like: bool,
+    /// Why it failed the disk test ("" when it passed).
+    pub why: &'static str,
     /// Whether it ended up as one of a located chart's fiducials.
     pub used: bool,
 }
@@ -152,7 +154,23 @@ pub fn search(plane: &Plane, target: &Target) -> Result<Search, LocateError> {
     let picks = assign::choose(&small, target, &candidates);
     let mut charts = Vec::new();
     for pick in picks {
-        if let Some(located) = ellipse::finish(plane, target, &pick, &candidates) {
+        if let Some(mut located) = ellipse::finish(plane, target, &pick, &candidates) {
+            // Re-verify under the final homography.
+            let score = assign::verify(&small, target, &located.homography).unwrap_or(0.0);
+            let min = if pick.hidden.is_some() {
+                assign::MIN_SCORE_TRIPLE
+            } else {
+                assign::MIN_SCORE_QUAD
+            };
+            if score < min {
+                continue;
+            }
+            located.score = score;
+            if score < 0.8 {
+                located.warnings.push(format!(
+                    "weak agreement between image and target pattern (correlation {score:.2})"
+                ));
+            }
             for &ci in pick.cand_idx.iter() {
                 candidates[ci].used = true;
             }

@@ -249,8 +249,8 @@ fn blur(img: &[f64], w: usize, h: usize, sigma: f64) -> Vec<f64> {
 }
 
 /// A random camera pose: roll any, tilt up to `max_tilt_deg` about a random in-plane
-/// axis, camera 1–3 chart diagonals away; the projected chart is scaled so its bounding
-/// box spans `coverage` of the frame (along the tighter dimension) and placed at random.
+/// axis, camera 1–3 chart diagonals away; the projected chart is scaled so its area is
+/// `coverage` of the frame's (or as large as fits) and placed at random.
 pub fn random_pose(
     t: &Target,
     w: usize,
@@ -291,7 +291,17 @@ pub fn random_pose(
         .collect();
     let (minx, maxx) = minmax(proj.iter().map(|p| p[0]));
     let (miny, maxy) = minmax(proj.iter().map(|p| p[1]));
-    let scale = coverage * (w as f64 / (maxx - minx)).min(h as f64 / (maxy - miny));
+    // `coverage` is the chart's area as a fraction of the frame's, capped where it fits.
+    let area: f64 = (0..4)
+        .map(|i| {
+            let (a, b) = (proj[i], proj[(i + 1) % 4]);
+            a[0] * b[1] - a[1] * b[0]
+        })
+        .sum::<f64>()
+        .abs()
+        / 2.0;
+    let fit = 0.98 * (w as f64 / (maxx - minx)).min(h as f64 / (maxy - miny));
+    let scale = (coverage * (w * h) as f64 / area).sqrt().min(fit);
     let bw = (maxx - minx) * scale;
     let bh = (maxy - miny) * scale;
     let ox = rng.range(0.0, (w as f64 - bw).max(0.0));
