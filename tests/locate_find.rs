@@ -191,3 +191,117 @@ fn pose_sweep_one(k: usize) -> String {
     let st = pose_sweep_from(k + 1, 11, 800, 600, k);
     format!("found {}", st.found)
 }
+
+fn rms(e: &[f64]) -> f64 {
+    (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt()
+}
+
+#[test]
+fn one_hidden_fiducial_is_solved_and_reported() {
+    let t = test_target(200.0, 140.0);
+    let d = t.fiducials[0].diameter_mm;
+    for (k, hide) in ["br", "tl", "tr"].iter().enumerate() {
+        let f = t.fiducials.iter().find(|f| f.id == *hide).unwrap();
+        let mut rng = Rng(40 + k as u64);
+        let hom = random_pose(&t, 800, 600, 30.0, 0.45, &mut rng);
+        let look = Look {
+            vignette: 0.2,
+            noise: [0.003, 0.01],
+            // A thumb over the mark's white square.
+            occluders: vec![[f.x_mm - 1.2 * d, f.y_mm - 1.2 * d, 2.4 * d, 2.4 * d]],
+            ..Look::default()
+        };
+        let plane = render(&[(&t, hom)], 800, 600, &look, &mut rng);
+        let c = locate::find_chart(&plane, &t, None).unwrap();
+        assert_eq!(c.hidden.as_deref(), Some(*hide));
+        assert!(
+            c.warnings
+                .iter()
+                .any(|w| w.contains(hide) && w.contains("not seen"))
+        );
+        let e = corner_err(&c.corners_px, &true_corners(&t, &hom));
+        eprintln!("hidden {hide}: corner errors {e:?}");
+        assert!(rms(&e) < 0.5, "hidden {hide}: corner errors {e:?}");
+    }
+}
+
+#[test]
+fn two_charts_in_one_frame_are_listed_left_to_right() {
+    let t = test_target(200.0, 140.0);
+    let src = sweepmtf::geometry::rect_corners(0.0, 0.0, 200.0, 140.0);
+    let left = Homography::from_quads(
+        &src,
+        &[[30.0, 200.0], [380.0, 170.0], [390.0, 420.0], [40.0, 430.0]],
+    )
+    .unwrap();
+    let right = Homography::from_quads(
+        &src,
+        &[
+            [430.0, 120.0],
+            [770.0, 160.0],
+            [750.0, 400.0],
+            [440.0, 380.0],
+        ],
+    )
+    .unwrap();
+    let mut rng = Rng(9);
+    let plane = render(
+        &[(&t, right), (&t, left)],
+        800,
+        600,
+        &Look::default(),
+        &mut rng,
+    );
+    let charts = locate::find_charts(&plane, &t).unwrap();
+    assert_eq!(charts.len(), 2);
+    for (c, h) in charts.iter().zip([left, right]) {
+        let e = corner_err(&c.corners_px, &true_corners(&t, &h));
+        assert!(e.iter().all(|&v| v < 0.3), "{e:?}");
+    }
+    let second = locate::find_chart(&plane, &t, Some(1)).unwrap();
+    assert_eq!(second.corners_px, charts[1].corners_px);
+    let first = locate::find_chart(&plane, &t, None).unwrap();
+    assert!(first.warnings.iter().any(|w| w.contains("2 charts")));
+    assert!(matches!(
+        locate::find_chart(&plane, &t, Some(2)),
+        Err(locate::LocateError::NoSuchChart { index: 2, found: 2 })
+    ));
+}
+
+#[test]
+fn blank_frame_gives_a_clean_not_found() {
+    let t = test_target(200.0, 140.0);
+    let mut rng = Rng(3);
+    let look = Look {
+        distractors: vec![
+            ([100.0, 100.0], 10.0, false),
+            ([300.0, 120.0], 10.0, false),
+            ([300.0, 300.0], 10.0, false),
+            ([100.0, 320.0], 10.0, false),
+        ],
+        noise: [0.01, 0.0],
+        ..Look::default()
+    };
+    // No target in view: four dark disks on a grey wall form a quad but not the target.
+    let far = Homography::from_quads(
+        &sweepmtf::geometry::rect_corners(0.0, 0.0, 200.0, 140.0),
+        &[
+            [-900.0, -900.0],
+            [-800.0, -900.0],
+            [-800.0, -850.0],
+            [-900.0, -850.0],
+        ],
+    )
+    .unwrap();
+    let plane = render(&[(&t, far)], 480, 400, &look, &mut rng);
+    match locate::find_charts(&plane, &t) {
+        Err(e @ locate::LocateError::NotFound { .. }) => {
+            let m = e.to_string();
+            assert!(
+                m.starts_with("no chart found: looked for 4 black fiducial marks"),
+                "{m}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+}

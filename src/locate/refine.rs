@@ -273,6 +273,24 @@ fn solve8(mut a: [[f64; 8]; 8], mut b: [f64; 8]) -> Option<[f64; 8]> {
     Some([0, 1, 2, 3, 4, 5, 6, 7].map(|i| b[i] / a[i][i]))
 }
 
+/// RMS distance of points from their total-least-squares line (px).
+fn line_rms(pts: &[Point]) -> f64 {
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p[0]).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p[1]).sum::<f64>() / n;
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in pts {
+        let (dx, dy) = (p[0] - mx, p[1] - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    // smallest eigenvalue of the scatter matrix = sum of squared normal distances
+    let tr = sxx + syy;
+    let disc = ((sxx - syy).powi(2) / 4.0 + sxy * sxy).sqrt();
+    ((tr / 2.0 - disc).max(0.0) / n).sqrt()
+}
+
 /// Drops edge points more than `max_px` from their predicted line.
 fn prune(h: &Homography, edges: Vec<EdgeObs>, max_px: f64) -> Vec<EdgeObs> {
     edges
@@ -343,17 +361,41 @@ pub fn refine_roi(
         Homography::from_quads(&src, &corners).map_err(|e| LocateError::Refine(e.to_string()))?;
     let search = search_px.max(2.0) + 2.0;
     for s in [search, 3.0, 2.0] {
-        let edges = prune(&h, collect_edges(&full, &segs, &h, s), s);
-        // every side must be seen
-        let sides_seen = segs
-            .iter()
-            .filter(|(a, b)| edges.iter().filter(|o| o.a == *a && o.b == *b).count() >= 3)
-            .count();
-        if edges.len() < 12 || (target.is_none() && sides_seen < 4) {
+        let mut edges = prune(&h, collect_edges(&full, &segs, &h, s), s);
+        if target.is_none() {
+            // A side whose edge is not clearly seen (e.g. a sweep's low-frequency end, which
+            // starts at a bright peak) keeps the user's line.
+            let mut seen = 0;
+            for (i, &(a, b)) in segs.iter().enumerate() {
+                let pts: Vec<Point> = edges
+                    .iter()
+                    .filter(|o| o.a == a && o.b == b)
+                    .map(|o| o.p)
+                    .collect();
+                if pts.len() >= 6 && line_rms(&pts) <= 1.0 {
+                    seen += 1;
+                    continue;
+                }
+                edges.retain(|o| !(o.a == a && o.b == b));
+                let (ca, cb) = (corners[i], corners[(i + 1) % 4]);
+                for k in 0..10 {
+                    let f = (k as f64 + 0.5) / 10.0;
+                    edges.push(EdgeObs {
+                        a,
+                        b,
+                        p: [ca[0] + f * (cb[0] - ca[0]), ca[1] + f * (cb[1] - ca[1])],
+                    });
+                }
+            }
+            if seen < 2 {
+                return Err(LocateError::Refine(format!(
+                    "edges not found near the given corners ({seen} of 4 sides seen)"
+                )));
+            }
+        } else if edges.len() < 12 {
             return Err(LocateError::Refine(format!(
-                "edges not found near the given corners (saw {} edge points on {sides_seen} of {} sides)",
-                edges.len(),
-                segs.len()
+                "edges not found near the given corners (saw {} edge points)",
+                edges.len()
             )));
         }
         h = fit_homography(h, &edges, &[]);
