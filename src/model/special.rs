@@ -62,9 +62,32 @@ pub fn cospi(x: f64) -> f64 {
     if is_odd(n) { -c } else { c }
 }
 
-/// (sin(πx), cos(πx)) with exact argument reduction (see [`sinpi`], [`cospi`]).
+/// (sin(πx), cos(πx)) with one exact argument reduction and one `sin_cos`;
+/// (0, ±1) for |x| ≥ 2⁵² and (0, 1) for ±∞, as [`sinpi`] and [`cospi`].
 pub fn sincospi(x: f64) -> (f64, f64) {
-    (sinpi(x), cospi(x))
+    if x.abs() >= INTEGER_ONLY {
+        return (0.0, cospi(x));
+    }
+    let (n, r) = reduce(x);
+    let a = r.abs();
+    let (s, c) = if a <= 0.25 {
+        (PI * a).sin_cos()
+    } else {
+        let (c, s) = (PI * (0.5 - a)).sin_cos();
+        (s, c)
+    };
+    let s = s.copysign(r);
+    if is_odd(n) { (-s, -c) } else { (s, c) }
+}
+
+/// sinc(x) given s = sin(πx) already computed (see [`sinc`]).
+pub fn sinc_from_sinpi(x: f64, s: f64) -> f64 {
+    let a = x.abs();
+    if a < 1e-4 {
+        let y2 = (PI * a) * (PI * a);
+        return 1.0 - y2 / 6.0 * (1.0 - y2 / 20.0);
+    }
+    s.abs().copysign(s * x) / (PI * a)
 }
 
 /// The normalised sinc, sin(πx)/(πx), with sinc(0) = 1 and a Taylor path for |x| < 1e-4.
@@ -241,6 +264,12 @@ mod tests {
         assert!((cospi(1.0 / 3.0) - 0.5).abs() < 1e-16);
         assert!((sinpi(2.5) - 1.0).abs() == 0.0);
         assert!((sinpi(-3.5) - 1.0).abs() == 0.0);
+        for x in [
+            -7.3, -2.5, -0.7, -0.26, -0.25, -1e-9, 0.0, 0.1, 0.3, 0.5, 1.75, 3.0, 1e17,
+        ] {
+            assert_eq!(sincospi(x), (sinpi(x), cospi(x)), "{x}");
+            assert_eq!(sinc_from_sinpi(x, sinpi(x)), sinc(x), "{x}");
+        }
     }
 
     #[test]

@@ -13,7 +13,7 @@
 //! The result is multiplied by e^(−i2πf·c) and divided by the area.
 
 use super::guard::{FAR, LENGTH_RANGE_MM};
-use crate::model::special::{cospi, sinc, sinpi};
+use crate::model::special::{sinc, sincospi};
 use crate::model::{Factor, ModelError};
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -259,9 +259,8 @@ impl Polygon {
         Complex64::new(re, im)
     }
 
-    /// ∬ exp(−i2π f·r) over the centred polygon by the edge sum (|q|R > 4).
-    fn edges(&self, u: f64, v: f64) -> Complex64 {
-        let f = u.hypot(v);
+    /// ∬ exp(−i2π f·r) over the centred polygon by the edge sum (|q|R > 4), f = |(u, v)|.
+    fn edges(&self, u: f64, v: f64, f: f64) -> Complex64 {
         let (fx, fy) = (u / f, v / f);
         let n = self.verts.len();
         let mut re = 0.0;
@@ -271,9 +270,9 @@ impl Polygon {
             let b = self.verts[(j + 1) % n];
             let e = sub(b, a);
             let w = (fx * e[1] - fy * e[0]) * sinc(u * e[0] + v * e[1]);
-            let phase = u * (a[0] + b[0]) + v * (a[1] + b[1]); // 2 f·m
-            re += w * cospi(phase);
-            im -= w * sinpi(phase);
+            let (s, c) = sincospi(u * (a[0] + b[0]) + v * (a[1] + b[1])); // 2 f·m
+            re += w * c;
+            im -= w * s;
         }
         // multiply by i/(2π f)
         let k = 1.0 / (2.0 * PI * f);
@@ -294,10 +293,11 @@ impl Factor for Polygon {
         let raw = if 2.0 * PI * f * self.r_max <= SERIES_QR {
             self.series(u, v)
         } else {
-            self.edges(u, v)
+            self.edges(u, v, f)
         };
         let phase = 2.0 * (u * self.centre[0] + v * self.centre[1]);
-        let shift = Complex64::new(cospi(phase), -sinpi(phase));
+        let (s, c) = sincospi(phase);
+        let shift = Complex64::new(c, -s);
         raw * shift / self.area
     }
 }
