@@ -318,7 +318,7 @@ fn judge(
             return None;
         }
     }
-    let score = verify(g, target, &h)?;
+    let score = verify_staged(g, target, &h, min_score - 0.2)?;
     if score < min_score {
         return None;
     }
@@ -353,38 +353,78 @@ fn shape_matches(p: [f64; 3], m: [f64; 3]) -> bool {
 /// Correlation between the target's reflectance and the image at points where the
 /// pattern is locally flat; `None` when too little of the target is in the image.
 pub fn verify(g: &Gray<'_>, target: &Target, h: &Homography) -> Option<f64> {
-    const NX: usize = 40;
-    const NY: usize = 30;
-    let mut pts: Vec<Point> = Vec::with_capacity(NX * NY + 64);
-    for j in 0..NY {
-        for i in 0..NX {
-            pts.push([
-                (i as f64 + 0.5) / NX as f64 * target.width_mm,
-                (j as f64 + 0.5) / NY as f64 * target.height_mm,
-            ]);
-        }
-    }
+    verify_staged(g, target, h, f64::NEG_INFINITY)
+}
+
+/// [`verify`], giving up early (returning the low stage-1 value) when the points around
+/// the fiducials alone correlate below `early_min`.
+fn verify_staged(g: &Gray<'_>, target: &Target, h: &Homography, early_min: f64) -> Option<f64> {
+    let mut fid_pts: Vec<Point> = Vec::with_capacity(17 * target.fiducials.len());
     for f in &target.fiducials {
         let d = f.diameter_mm;
-        pts.push([f.x_mm, f.y_mm]);
+        fid_pts.push([f.x_mm, f.y_mm]);
         for k in 0..8 {
             let a = k as f64 * std::f64::consts::FRAC_PI_4;
             for r in [0.375 * d, 0.8 * d] {
-                pts.push([f.x_mm + r * a.cos(), f.y_mm + r * a.sin()]);
+                fid_pts.push([f.x_mm + r * a.cos(), f.y_mm + r * a.sin()]);
             }
         }
     }
-    let total = pts.len();
-    let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for p in pts {
+    let mut acc = Corr::default();
+    let stage1 = fid_pts.len();
+    for p in fid_pts {
+        acc.add_point(g, target, h, p);
+    }
+    if acc.n >= 0.5 * stage1 as f64
+        && let Some(r) = acc.value()
+        && r < early_min
+    {
+        return Some(r);
+    }
+    const NX: usize = 40;
+    const NY: usize = 30;
+    for j in 0..NY {
+        for i in 0..NX {
+            acc.add_point(
+                g,
+                target,
+                h,
+                [
+                    (i as f64 + 0.5) / NX as f64 * target.width_mm,
+                    (j as f64 + 0.5) / NY as f64 * target.height_mm,
+                ],
+            );
+        }
+    }
+    let total = stage1 + NX * NY;
+    if acc.n < 0.3 * total as f64 || acc.n < 20.0 {
+        return None;
+    }
+    Some(acc.value().unwrap_or(0.0))
+}
+
+/// Running sums for a Pearson correlation of expected reflectance and image value.
+#[derive(Default)]
+struct Corr {
+    n: f64,
+    sx: f64,
+    sy: f64,
+    sxx: f64,
+    syy: f64,
+    sxy: f64,
+}
+
+impl Corr {
+    /// Adds a target point if the pattern is flat around it and it falls in the image.
+    fn add_point(&mut self, g: &Gray<'_>, target: &Target, h: &Homography, p: Point) {
         let ip = h.apply(p);
         if !ip[0].is_finite() || !ip[1].is_finite() {
-            continue;
+            return;
         }
         let j = h.jacobian(p);
         let det = (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs();
         if det <= 0.0 {
-            continue;
+            return;
         }
         // 1.5 search-image samples, in mm.
         let eps = 1.5 * g.scale[0].max(g.scale[1]) / det.sqrt();
@@ -402,26 +442,30 @@ pub fn verify(g: &Gray<'_>, target: &Target, h: &Homography) -> Option<f64> {
         .iter()
         .all(|o| (target.reflectance(p[0] + o[0], p[1] + o[1]) - e).abs() < 0.08);
         if !flat {
-            continue;
+            return;
         }
-        let Some(v) = g.at_img(ip) else { continue };
-        n += 1.0;
-        sx += e;
-        sy += v;
-        sxx += e * e;
-        syy += v * v;
-        sxy += e * v;
+        let Some(v) = g.at_img(ip) else { return };
+        self.n += 1.0;
+        self.sx += e;
+        self.sy += v;
+        self.sxx += e * e;
+        self.syy += v * v;
+        self.sxy += e * v;
     }
-    if n < 0.3 * total as f64 || n < 20.0 {
-        return None;
+
+    fn value(&self) -> Option<f64> {
+        let n = self.n;
+        if n < 2.0 {
+            return None;
+        }
+        let cov = self.sxy / n - self.sx * self.sy / (n * n);
+        let vx = self.sxx / n - (self.sx / n).powi(2);
+        let vy = self.syy / n - (self.sy / n).powi(2);
+        if vx <= 0.0 || vy <= 0.0 {
+            return Some(0.0);
+        }
+        Some(cov / (vx * vy).sqrt())
     }
-    let cov = sxy / n - sx * sy / (n * n);
-    let vx = sxx / n - (sx / n).powi(2);
-    let vy = syy / n - (sy / n).powi(2);
-    if vx <= 0.0 || vy <= 0.0 {
-        return Some(0.0);
-    }
-    Some(cov / (vx * vy).sqrt())
 }
 
 #[cfg(test)]
