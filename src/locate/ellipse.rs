@@ -267,10 +267,22 @@ fn solve_with_correction(
     marks: &[(usize, Point)],
     mut h: Homography,
 ) -> Option<Homography> {
+    // Go round the marks in the target's turning order (a quad must not cross itself).
+    let mut marks = marks.to_vec();
+    let pos = |fi: usize| [target.fiducials[fi].x_mm, target.fiducials[fi].y_mm];
+    let n = marks.len() as f64;
+    let cx = marks.iter().map(|m| pos(m.0)[0]).sum::<f64>() / n;
+    let cy = marks.iter().map(|m| pos(m.0)[1]).sum::<f64>() / n;
+    marks.sort_by(|a, b| {
+        let (pa, pb) = (pos(a.0), pos(b.0));
+        (pa[1] - cy)
+            .atan2(pa[0] - cx)
+            .total_cmp(&(pb[1] - cy).atan2(pb[0] - cx))
+    });
     for _ in 0..3 {
         let mut src = Vec::new();
         let mut dst = Vec::new();
-        for &(fi, p) in marks {
+        for &(fi, p) in &marks {
             let f = &target.fiducials[fi];
             let c = [f.x_mm, f.y_mm];
             let shift = match projected_circle_centre(&h, c, f.diameter_mm / 2.0) {
@@ -294,6 +306,38 @@ fn solve_with_correction(
         };
     }
     Some(h)
+}
+
+/// Looks for fiducial `fi` where `h` predicts it; its refined image centre when a mark
+/// of the predicted size and shape is there.
+fn recover_mark(full: &Gray<'_>, target: &Target, h: &Homography, fi: usize) -> Option<Point> {
+    let f = &target.fiducials[fi];
+    let c = [f.x_mm, f.y_mm];
+    let p = h.apply(c);
+    let j = h.jacobian(c);
+    let r2 = (f.diameter_mm / 2.0).powi(2) / 4.0;
+    let pred = [
+        r2 * (j[0][0] * j[0][0] + j[0][1] * j[0][1]),
+        r2 * (j[0][0] * j[1][0] + j[0][1] * j[1][1]),
+        r2 * (j[1][0] * j[1][0] + j[1][1] * j[1][1]),
+    ];
+    let s = full.scale;
+    let grid_cov = [
+        pred[0] / (s[0] * s[0]),
+        pred[1] / (s[0] * s[1]),
+        pred[2] / (s[1] * s[1]),
+    ];
+    let t = super::blobs::ray_test(full, full.to_grid(p), grid_cov)?;
+    if !t.disk_like {
+        return None;
+    }
+    let e = refine_mark(full, p, pred)?;
+    let radius = (pred[0] + pred[2]).sqrt(); // ≈ the imaged radius
+    let moved = (e.centre[0] - p[0]).hypot(e.centre[1] - p[1]);
+    let size = ((e.cov[0] * e.cov[2] - e.cov[1] * e.cov[1])
+        / (pred[0] * pred[2] - pred[1] * pred[1]))
+        .sqrt();
+    (moved < 0.25 * radius && (0.6..=1.6).contains(&size)).then_some(e.centre)
 }
 
 /// Full-resolution refinement of a pick; `None` when the marks cannot be measured.
@@ -325,20 +369,28 @@ pub fn finish(plane: &Plane, target: &Target, pick: &Pick, cands: &[Candidate]) 
                 ([f.x_mm, f.y_mm], p)
             })
             .collect();
-        match super::refine::fit_target_edges(&full, target, h, &fixed) {
-            Some((h2, n)) => {
-                h = h2;
-                warnings.push(format!(
+        let edges = super::refine::fit_target_edges(&full, target, h, &fixed);
+        if let Some((h2, _)) = edges {
+            h = h2;
+        }
+        // The mark may be there but too small or faint for the blob search: look where
+        // the solution predicts it.
+        if let Some(p) = recover_mark(&full, target, &h, missing) {
+            marks.push((missing, p));
+            h = solve_with_correction(target, &marks, h)?;
+        } else {
+            match edges {
+                Some((_, n)) => warnings.push(format!(
                     "fiducial '{id}' not seen (hidden or outside the frame): solved from the other {} marks and {n} edge points of the target",
                     marks.len()
-                ));
+                )),
+                None => warnings.push(format!(
+                    "fiducial '{id}' not seen (hidden or outside the frame): solved from the other {} marks assuming no perspective (affine); corners may be off under tilt",
+                    marks.len()
+                )),
             }
-            None => warnings.push(format!(
-                "fiducial '{id}' not seen (hidden or outside the frame): solved from the other {} marks assuming no perspective (affine); corners may be off under tilt",
-                marks.len()
-            )),
+            hidden = Some(id);
         }
-        hidden = Some(id);
     }
     let corners = rect_corners(0.0, 0.0, target.width_mm, target.height_mm).map(|c| h.apply(c));
     if corners.iter().flatten().any(|v| !v.is_finite()) {

@@ -97,6 +97,13 @@ pub struct Located {
     pub score: f64,
 }
 
+impl Located {
+    /// A chart rectangle (mm) placed in the image: its corners in image px, in order round it.
+    pub fn place(&self, rect: &crate::target::Rect) -> [Point; 4] {
+        rect.corners().map(|p| self.homography.apply(p))
+    }
+}
+
 /// Everything the search saw: candidates and charts (for [`debug_image`]).
 #[derive(Debug, Clone, Default)]
 pub struct Search {
