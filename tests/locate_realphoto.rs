@@ -30,6 +30,7 @@ fn other_chart_design_is_cleanly_not_found() {
     match locate::find_chart(&plane, &t, None) {
         Err(e @ LocateError::NotFound { .. }) => {
             let msg = e.to_string();
+            eprintln!("{msg}");
             assert!(msg.contains("looked for") && !msg.contains('\n'), "{msg}");
         }
         other => panic!("expected NotFound, got {other:?}"),

@@ -50,7 +50,51 @@ pub fn find_candidates(g: &Gray<'_>) -> Vec<Candidate> {
             }
         }
     }
+    mark_crowded(&mut out);
     out
+}
+
+/// A fiducial sits alone on its white square (side two diameters): a disk-like blob with
+/// another blob reaching into that square is rejected (dot grids, text, textures).
+fn mark_crowded(cands: &mut [Candidate]) {
+    let radius_towards = |c: &Candidate, u: Point| {
+        let [cxx, cxy, cyy] = c.cov_px2;
+        let det = cxx * cyy - cxy * cxy;
+        let q = (u[0] * u[0] * cyy - 2.0 * u[0] * u[1] * cxy + u[1] * u[1] * cxx) / det;
+        2.0 / q.sqrt()
+    };
+    let mean_radius = |c: &Candidate| {
+        let [cxx, cxy, cyy] = c.cov_px2;
+        2.0 * (cxx * cyy - cxy * cxy).max(0.0).sqrt().sqrt()
+    };
+    let crowded: Vec<bool> = cands
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            a.disk_like
+                && cands.iter().enumerate().any(|(j, b)| {
+                    if i == j {
+                        return false;
+                    }
+                    let d = [
+                        b.centre_px[0] - a.centre_px[0],
+                        b.centre_px[1] - a.centre_px[1],
+                    ];
+                    let dist = d[0].hypot(d[1]);
+                    if dist <= 0.0 {
+                        return false;
+                    }
+                    let u = [d[0] / dist, d[1] / dist];
+                    dist - mean_radius(b) < 1.9 * radius_towards(a, u)
+                })
+        })
+        .collect();
+    for (c, crowd) in cands.iter_mut().zip(crowded) {
+        if crowd {
+            c.disk_like = false;
+            c.why = "another blob inside its white square";
+        }
+    }
 }
 
 fn find_candidates_one(g: &Gray<'_>) -> Vec<Candidate> {
