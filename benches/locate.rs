@@ -39,7 +39,26 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
+    // The real photo of another chart design (no chart of ours in it): time to say so.
+    let rel = "shared/realdata/chart_photo/mtfmapper_perspective_chart_photo.jpg";
+    let path = [
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../"),
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../../"),
+    ]
+    .iter()
+    .map(|d| d.to_string() + rel)
+    .find(|p| std::path::Path::new(p).exists());
+    if let Some(path) = path {
+        let plane = load_linear_luma(&path);
+        c.bench_function("locate_realphoto_not_found", |b| {
+            b.iter(|| locate::find_chart(&plane, &t, None).unwrap_err())
+        });
+    }
 }
 
-criterion_group!(benches, bench);
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);

@@ -14,6 +14,10 @@ use crate::target::{FiducialKind, Target};
 
 /// Most disk-like candidates considered (by contrast).
 pub const MAX_CANDIDATES: usize = 30;
+/// Most candidates tried in threes (one mark hidden).
+pub const MAX_CANDIDATES_TRIPLES: usize = 16;
+/// Marks at least this large (radius, search-image samples) must show the ring's white centre.
+pub const RING_RESOLVED_RADIUS: f64 = 3.0;
 /// Least correlation between image and target pattern for a quad of four marks.
 pub const MIN_SCORE_QUAD: f64 = 0.6;
 /// Least correlation for a solution from three marks (one hidden), after edge refinement.
@@ -37,21 +41,26 @@ pub struct Pick {
 }
 
 /// All accepted picks, best first, non-overlapping.
-pub fn choose(g: &Gray<'_>, target: &Target, cands: &[Candidate]) -> Vec<Pick> {
+pub fn choose(g: &Gray<'_>, target: &Target, pat: &Pattern, cands: &[Candidate]) -> Vec<Pick> {
     let mut idx: Vec<usize> = (0..cands.len()).filter(|&i| cands[i].disk_like).collect();
     idx.sort_by(|&a, &b| cands[b].contrast.total_cmp(&cands[a].contrast));
     idx.truncate(MAX_CANDIDATES);
     let fids: Vec<usize> = (0..target.fiducials.len().min(4)).collect();
     let mut picks = Vec::new();
     if fids.len() == 4 {
-        picks = quads(g, target, cands, &idx);
+        picks = quads(g, target, pat, cands, &idx);
     }
     let mut chosen = select(picks);
     // Triples among candidates not used by a chart (one mark hidden).
     let used: Vec<usize> = chosen.iter().flat_map(|p| p.cand_idx.clone()).collect();
-    let rest: Vec<usize> = idx.iter().copied().filter(|i| !used.contains(i)).collect();
+    let rest: Vec<usize> = idx
+        .iter()
+        .copied()
+        .filter(|i| !used.contains(i))
+        .take(MAX_CANDIDATES_TRIPLES)
+        .collect();
     if rest.len() >= 3 {
-        let triples = triples(g, target, cands, &rest, &fids);
+        let triples = triples(g, target, pat, cands, &rest, &fids);
         let mut all = chosen.clone();
         for t in select(triples) {
             if !all.iter().any(|p| overlaps(p, &t, target)) {
@@ -122,7 +131,13 @@ fn convex(p: &[Point; 4]) -> bool {
     true
 }
 
-fn quads(g: &Gray<'_>, target: &Target, cands: &[Candidate], idx: &[usize]) -> Vec<Pick> {
+fn quads(
+    g: &Gray<'_>,
+    target: &Target,
+    pat: &Pattern,
+    cands: &[Candidate],
+    idx: &[usize],
+) -> Vec<Pick> {
     let fpos: Vec<Point> = target.fiducials[..4]
         .iter()
         .map(|f| [f.x_mm, f.y_mm])
@@ -142,23 +157,33 @@ fn quads(g: &Gray<'_>, target: &Target, cands: &[Candidate], idx: &[usize]) -> V
                     if !convex(&quad) {
                         continue;
                     }
+                    let big = set.iter().all(|&c| {
+                        let v = cands[c].cov_px2;
+                        let r = 2.0 * (v[0] * v[2] - v[1] * v[1]).max(0.0).sqrt().sqrt();
+                        r / g.scale[0].max(g.scale[1]) >= RING_RESOLVED_RADIUS
+                    });
                     for shift in 0..4 {
                         // candidate set[p_order[(m+shift)%4]] ↔ fiducial t_order[m]
                         let assign: Vec<(usize, usize)> = (0..4)
                             .map(|m| (set[p_order[(m + shift) % 4]], t_order[m]))
                             .collect();
-                        if let Some(r) = ring
-                            && ring_resolved(cands, &set)
-                            && !ring_ok(cands, &assign, Some(r))
-                        {
-                            continue;
+                        if let Some(r) = ring {
+                            if ring_resolved(cands, &set) {
+                                if !ring_ok(cands, &assign, Some(r)) {
+                                    continue;
+                                }
+                            } else if big {
+                                break; // large marks, none with a white centre: not our quad
+                            }
                         }
                         let src = [0, 1, 2, 3].map(|m| fpos[assign[m].1]);
                         let dst = [0, 1, 2, 3].map(|m| cands[assign[m].0].centre_px);
                         let Ok(h) = Homography::from_quads(&src, &dst) else {
                             continue;
                         };
-                        if let Some(p) = judge(g, target, cands, &assign, h, None, MIN_SCORE_QUAD) {
+                        if let Some(p) =
+                            judge(g, pat, target, cands, &assign, h, None, MIN_SCORE_QUAD)
+                        {
                             out.push(p);
                         }
                     }
@@ -201,6 +226,7 @@ fn ring_ok(cands: &[Candidate], assign: &[(usize, usize)], ring: Option<usize>) 
 fn triples(
     g: &Gray<'_>,
     target: &Target,
+    pat: &Pattern,
     cands: &[Candidate],
     idx: &[usize],
     fids: &[usize],
@@ -246,6 +272,7 @@ fn triples(
                         }
                         if let Some(p) = judge(
                             g,
+                            pat,
                             target,
                             cands,
                             &assign,
@@ -288,8 +315,10 @@ pub fn affine3(src: &[Point], dst: &[Point]) -> Option<Homography> {
 }
 
 /// Size/shape prediction check, then pattern verification.
+#[allow(clippy::too_many_arguments)]
 fn judge(
     g: &Gray<'_>,
+    pat: &Pattern,
     target: &Target,
     cands: &[Candidate],
     assign: &[(usize, usize)],
@@ -318,7 +347,7 @@ fn judge(
             return None;
         }
     }
-    let score = verify_staged(g, target, &h, min_score - 0.2)?;
+    let score = pat.verify(g, &h, min_score - 0.2)?;
     if score < min_score {
         return None;
     }
@@ -350,57 +379,110 @@ fn shape_matches(p: [f64; 3], m: [f64; 3]) -> bool {
     l2 >= 0.4 && l1 <= 2.5
 }
 
-/// Correlation between the target's reflectance and the image at points where the
-/// pattern is locally flat; `None` when too little of the target is in the image.
-pub fn verify(g: &Gray<'_>, target: &Target, h: &Homography) -> Option<f64> {
-    verify_staged(g, target, h, f64::NEG_INFINITY)
+/// The target's pattern sampled once for verification: points around the fiducials
+/// first, then a 40×30 grid, each with its reflectance and how far (mm) the pattern
+/// stays flat around it (within 0.08).
+#[derive(Debug, Clone)]
+pub struct Pattern {
+    pts: Vec<(Point, f64, f64)>,
+    n_fid: usize,
 }
 
-/// [`verify`], giving up early (returning the low stage-1 value) when the points around
-/// the fiducials alone correlate below `early_min`.
-fn verify_staged(g: &Gray<'_>, target: &Target, h: &Homography, early_min: f64) -> Option<f64> {
-    let mut fid_pts: Vec<Point> = Vec::with_capacity(17 * target.fiducials.len());
-    for f in &target.fiducials {
-        let d = f.diameter_mm;
-        fid_pts.push([f.x_mm, f.y_mm]);
-        for k in 0..8 {
-            let a = k as f64 * std::f64::consts::FRAC_PI_4;
-            for r in [0.375 * d, 0.8 * d] {
-                fid_pts.push([f.x_mm + r * a.cos(), f.y_mm + r * a.sin()]);
+impl Pattern {
+    /// Samples the target's pattern.
+    pub fn new(target: &Target) -> Pattern {
+        let mut pts: Vec<Point> = Vec::new();
+        for f in &target.fiducials {
+            let d = f.diameter_mm;
+            pts.push([f.x_mm, f.y_mm]);
+            for k in 0..8 {
+                let a = k as f64 * std::f64::consts::FRAC_PI_4;
+                for r in [0.375 * d, 0.8 * d] {
+                    pts.push([f.x_mm + r * a.cos(), f.y_mm + r * a.sin()]);
+                }
             }
         }
-    }
-    let mut acc = Corr::default();
-    let stage1 = fid_pts.len();
-    for p in fid_pts {
-        acc.add_point(g, target, h, p);
-    }
-    if acc.n >= 0.5 * stage1 as f64
-        && let Some(r) = acc.value()
-        && r < early_min
-    {
-        return Some(r);
-    }
-    const NX: usize = 40;
-    const NY: usize = 30;
-    for j in 0..NY {
-        for i in 0..NX {
-            acc.add_point(
-                g,
-                target,
-                h,
-                [
+        let n_fid = pts.len();
+        const NX: usize = 40;
+        const NY: usize = 30;
+        for j in 0..NY {
+            for i in 0..NX {
+                pts.push([
                     (i as f64 + 0.5) / NX as f64 * target.width_mm,
                     (j as f64 + 0.5) / NY as f64 * target.height_mm,
-                ],
-            );
+                ]);
+            }
         }
+        let max_eps = 0.25 * target.width_mm.min(target.height_mm);
+        let pts = pts
+            .into_iter()
+            .map(|p| {
+                let e = target.reflectance(p[0], p[1]);
+                let mut flat = 0.0;
+                let mut eps = 0.01;
+                while eps <= max_eps {
+                    let ok = [
+                        [eps, 0.0],
+                        [-eps, 0.0],
+                        [0.0, eps],
+                        [0.0, -eps],
+                        [eps, eps],
+                        [-eps, -eps],
+                        [eps, -eps],
+                        [-eps, eps],
+                    ]
+                    .iter()
+                    .all(|o| (target.reflectance(p[0] + o[0], p[1] + o[1]) - e).abs() < 0.08);
+                    if !ok {
+                        break;
+                    }
+                    flat = eps;
+                    eps *= std::f64::consts::SQRT_2;
+                }
+                (p, e, flat)
+            })
+            .collect();
+        Pattern { pts, n_fid }
     }
-    let total = stage1 + NX * NY;
-    if acc.n < 0.3 * total as f64 || acc.n < 20.0 {
-        return None;
+
+    /// Correlation between the pattern and the image (search image `g`) under `h`, over
+    /// points whose neighbourhood of 1.5 search-image samples is flat; `None` when too
+    /// little of the target is in the image. Gives up early (returning the low value)
+    /// when the points around the fiducials alone correlate below `early_min`.
+    pub fn verify(&self, g: &Gray<'_>, h: &Homography, early_min: f64) -> Option<f64> {
+        let mut acc = Corr::default();
+        let px = 1.5 * g.scale[0].max(g.scale[1]);
+        for (k, &(p, e, flat)) in self.pts.iter().enumerate() {
+            if k == self.n_fid
+                && acc.n >= 0.5 * self.n_fid as f64
+                && let Some(r) = acc.value()
+                && r < early_min
+            {
+                return Some(r);
+            }
+            let ip = h.apply(p);
+            if !ip[0].is_finite() || !ip[1].is_finite() {
+                continue;
+            }
+            let j = h.jacobian(p);
+            let det = (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs();
+            if det <= 0.0 || px / det.sqrt() > flat {
+                continue;
+            }
+            if let Some(v) = g.at_img(ip) {
+                acc.add(e, v);
+            }
+        }
+        if acc.n < 0.3 * self.pts.len() as f64 || acc.n < 20.0 {
+            return None;
+        }
+        Some(acc.value().unwrap_or(0.0))
     }
-    Some(acc.value().unwrap_or(0.0))
+}
+
+/// Correlation between the target's reflectance and the image (see [`Pattern::verify`]).
+pub fn verify(g: &Gray<'_>, target: &Target, h: &Homography) -> Option<f64> {
+    Pattern::new(target).verify(g, h, f64::NEG_INFINITY)
 }
 
 /// Running sums for a Pearson correlation of expected reflectance and image value.
@@ -415,36 +497,7 @@ struct Corr {
 }
 
 impl Corr {
-    /// Adds a target point if the pattern is flat around it and it falls in the image.
-    fn add_point(&mut self, g: &Gray<'_>, target: &Target, h: &Homography, p: Point) {
-        let ip = h.apply(p);
-        if !ip[0].is_finite() || !ip[1].is_finite() {
-            return;
-        }
-        let j = h.jacobian(p);
-        let det = (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs();
-        if det <= 0.0 {
-            return;
-        }
-        // 1.5 search-image samples, in mm.
-        let eps = 1.5 * g.scale[0].max(g.scale[1]) / det.sqrt();
-        let e = target.reflectance(p[0], p[1]);
-        let flat = [
-            [eps, 0.0],
-            [-eps, 0.0],
-            [0.0, eps],
-            [0.0, -eps],
-            [eps, eps],
-            [-eps, -eps],
-            [eps, -eps],
-            [-eps, eps],
-        ]
-        .iter()
-        .all(|o| (target.reflectance(p[0] + o[0], p[1] + o[1]) - e).abs() < 0.08);
-        if !flat {
-            return;
-        }
-        let Some(v) = g.at_img(ip) else { return };
+    fn add(&mut self, e: f64, v: f64) {
         self.n += 1.0;
         self.sx += e;
         self.sy += v;

@@ -158,12 +158,15 @@ pub fn search(plane: &Plane, target: &Target) -> Result<Search, LocateError> {
     }
     let small = downscale::reduce_for_search(plane);
     let mut candidates = blobs::find_candidates(&small);
-    let picks = assign::choose(&small, target, &candidates);
+    let pattern = assign::Pattern::new(target);
+    let picks = assign::choose(&small, target, &pattern, &candidates);
     let mut charts = Vec::new();
     for pick in picks {
         if let Some(mut located) = ellipse::finish(plane, target, &pick, &candidates) {
             // Re-verify under the final homography.
-            let score = assign::verify(&small, target, &located.homography).unwrap_or(0.0);
+            let score = pattern
+                .verify(&small, &located.homography, f64::NEG_INFINITY)
+                .unwrap_or(0.0);
             let min = if pick.hidden.is_some() {
                 assign::MIN_SCORE_TRIPLE
             } else {
