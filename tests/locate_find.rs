@@ -188,7 +188,8 @@ fn debug_one_shot() {
 }
 
 fn pose_sweep_one(k: usize) -> String {
-    let st = pose_sweep_from(k + 1, 11, 800, 600, k);
+    let seed = std::env::var("SEED").map_or(11, |s| s.parse().unwrap());
+    let st = pose_sweep_from(k + 1, seed, 800, 600, k);
     format!("found {}", st.found)
 }
 

@@ -343,7 +343,13 @@ fn judge(
         let pxx = r2 * (j[0][0] * j[0][0] + j[0][1] * j[0][1]);
         let pxy = r2 * (j[0][0] * j[1][0] + j[0][1] * j[1][1]);
         let pyy = r2 * (j[1][0] * j[1][0] + j[1][1] * j[1][1]);
-        if !shape_matches([pxx, pxy, pyy], cands[ci].cov_px2) {
+        // An affine guess (one mark hidden) cannot follow the perspective change of size.
+        let (lo, hi) = if hidden.is_some() {
+            (0.2, 5.0)
+        } else {
+            (0.4, 2.5)
+        };
+        if !shape_matches([pxx, pxy, pyy], cands[ci].cov_px2, lo, hi) {
             return None;
         }
     }
@@ -360,8 +366,8 @@ fn judge(
     })
 }
 
-/// Whether a measured covariance matches a predicted one: eigenvalues of P⁻¹M in [0.4, 2.5].
-fn shape_matches(p: [f64; 3], m: [f64; 3]) -> bool {
+/// Whether a measured covariance matches a predicted one: eigenvalues of P⁻¹M in [lo, hi].
+fn shape_matches(p: [f64; 3], m: [f64; 3], lo: f64, hi: f64) -> bool {
     let det = p[0] * p[2] - p[1] * p[1];
     if det <= 0.0 || !det.is_finite() {
         return false;
@@ -376,7 +382,7 @@ fn shape_matches(p: [f64; 3], m: [f64; 3]) -> bool {
     let dt = a00 * a11 - a01 * a10;
     let disc = (tr * tr / 4.0 - dt).max(0.0).sqrt();
     let (l1, l2) = (tr / 2.0 + disc, tr / 2.0 - disc);
-    l2 >= 0.4 && l1 <= 2.5
+    l2 >= lo && l1 <= hi
 }
 
 /// The target's pattern sampled once for verification: points around the fiducials
@@ -540,7 +546,7 @@ mod tests {
 
     #[test]
     fn shape_check_accepts_rotated_equal_and_rejects_double_size() {
-        assert!(shape_matches([4.0, 1.0, 2.0], [4.0, 1.0, 2.0]));
-        assert!(!shape_matches([4.0, 1.0, 2.0], [12.0, 3.0, 6.0]));
+        assert!(shape_matches([4.0, 1.0, 2.0], [4.0, 1.0, 2.0], 0.4, 2.5));
+        assert!(!shape_matches([4.0, 1.0, 2.0], [12.0, 3.0, 6.0], 0.4, 2.5));
     }
 }

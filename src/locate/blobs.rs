@@ -30,28 +30,94 @@ struct Comp {
     touches_border: bool,
 }
 
-/// The blobs of the search image and of a 2× coarser copy (where small rings fill in
+/// The blobs of the search image (under two dark masks: relative to the local mean
+/// and to the local white level) and of a 2× coarser copy (where small rings fill in
 /// to solid blobs), each tested for being a fiducial (image px), without duplicates.
 pub fn find_candidates(g: &Gray<'_>) -> Vec<Candidate> {
-    let mut out = find_candidates_one(g);
+    let mut out = find_candidates_one(g, &dark_mask(g));
+    merge(&mut out, find_candidates_one(g, &dark_mask_white(g)));
     if g.w.min(g.h) >= 200 {
         let coarse = super::downscale::box_reduce(g, 2);
-        for c in find_candidates_one(&coarse) {
-            let r = 2.0 * (c.cov_px2[0] + c.cov_px2[2]).sqrt();
-            let dup = out.iter().any(|f| {
-                (f.centre_px[0] - c.centre_px[0]).hypot(f.centre_px[1] - c.centre_px[1]) < r
-                    && (f.disk_like || !c.disk_like)
-            });
-            if !dup {
-                out.retain(|f| {
-                    (f.centre_px[0] - c.centre_px[0]).hypot(f.centre_px[1] - c.centre_px[1]) >= r
-                });
-                out.push(c);
-            }
-        }
+        merge(&mut out, find_candidates_one(&coarse, &dark_mask(&coarse)));
     }
     mark_crowded(&mut out);
     out
+}
+
+/// Adds new candidates unless one is already there (a disk-like one is preferred).
+fn merge(out: &mut Vec<Candidate>, more: Vec<Candidate>) {
+    for c in more {
+        let r = 2.0 * (c.cov_px2[0] + c.cov_px2[2]).sqrt();
+        let near = |f: &Candidate| {
+            (f.centre_px[0] - c.centre_px[0]).hypot(f.centre_px[1] - c.centre_px[1]) < r
+        };
+        let dup = out.iter().any(|f| near(f) && (f.disk_like || !c.disk_like));
+        if !dup {
+            out.retain(|f| !near(f));
+            out.push(c);
+        }
+    }
+}
+
+/// Dark mask: value < 0.5 × the local white level (maximum over a window of side ≈ 7 %
+/// of the short side); keeps thin dark rings whole where the mean is pulled down.
+fn dark_mask_white(g: &Gray<'_>) -> Vec<bool> {
+    let (w, h) = (g.w, g.h);
+    let r = ((0.035 * w.min(h) as f64).round() as usize).clamp(3, 100);
+    let rows: Vec<f32> = g
+        .data
+        .par_chunks(w)
+        .flat_map_iter(|row| sliding_max(row, r))
+        .collect();
+    let mut colmax = vec![0.0f32; w * h];
+    let mut col = vec![0.0f32; h];
+    for i in 0..w {
+        for j in 0..h {
+            col[j] = rows[j * w + i];
+        }
+        for (j, v) in sliding_max(&col, r).into_iter().enumerate() {
+            colmax[j * w + i] = v;
+        }
+    }
+    g.data
+        .iter()
+        .zip(&colmax)
+        .map(|(&v, &m)| v < 0.5 * m)
+        .collect()
+}
+
+/// Maximum over [i−r, i+r] (clamped), van Herk / Gil–Werman.
+fn sliding_max(x: &[f32], r: usize) -> Vec<f32> {
+    let n = x.len();
+    let k = 2 * r + 1;
+    let mut fwd = vec![f32::NEG_INFINITY; n];
+    let mut bwd = vec![f32::NEG_INFINITY; n];
+    for i in 0..n {
+        fwd[i] = if i % k == 0 {
+            x[i]
+        } else {
+            fwd[i - 1].max(x[i])
+        };
+    }
+    for i in (0..n).rev() {
+        bwd[i] = if i % k == k - 1 || i == n - 1 {
+            x[i]
+        } else {
+            bwd[i + 1].max(x[i])
+        };
+    }
+    (0..n)
+        .map(|i| {
+            let lo = i.saturating_sub(r);
+            let hi = (i + r).min(n - 1);
+            if lo / k == hi / k {
+                // One block (a window clipped at an end): direct.
+                x[lo..=hi].iter().cloned().fold(f32::NEG_INFINITY, f32::max)
+            } else {
+                bwd[lo].max(fwd[hi])
+            }
+        })
+        .collect()
 }
 
 /// A fiducial sits alone on its white square (side two diameters): a disk-like blob with
@@ -97,9 +163,8 @@ fn mark_crowded(cands: &mut [Candidate]) {
     }
 }
 
-fn find_candidates_one(g: &Gray<'_>) -> Vec<Candidate> {
-    let dark = dark_mask(g);
-    let comps = components(&dark, g.w, g.h);
+fn find_candidates_one(g: &Gray<'_>, dark: &[bool]) -> Vec<Candidate> {
+    let comps = components(dark, g.w, g.h);
     let short = g.w.min(g.h) as f64;
     let max_area = (0.25 * short).powi(2);
     comps
@@ -370,4 +435,23 @@ pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
             ""
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sliding_max_matches_brute_force() {
+        let x: Vec<f32> = (0..57).map(|i| ((i * 37) % 23) as f32).collect();
+        for r in [0, 1, 3, 10, 60] {
+            let got = sliding_max(&x, r);
+            for (i, &g) in got.iter().enumerate() {
+                let lo = i.saturating_sub(r);
+                let hi = (i + r).min(x.len() - 1);
+                let want = x[lo..=hi].iter().cloned().fold(f32::NEG_INFINITY, f32::max);
+                assert_eq!(g, want, "r {r} i {i}");
+            }
+        }
+    }
 }
