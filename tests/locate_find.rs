@@ -306,3 +306,13 @@ fn blank_frame_gives_a_clean_not_found() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The same 200 shots on a smaller 640×480 frame (fiducials down to ≈ 4 px across).
+#[test]
+#[ignore]
+fn random_poses_200_shots_small_frame() {
+    let st = pose_sweep(200, 2026, 640, 480);
+    let (rms, _) = report(&st);
+    assert_eq!(st.false_found, 0);
+    assert!(rms <= 0.5, "corner RMS {rms}");
+}

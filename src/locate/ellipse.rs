@@ -339,7 +339,7 @@ fn recover_mark(full: &Gray<'_>, target: &Target, h: &Homography, fi: usize) -> 
     let size = ((e.cov[0] * e.cov[2] - e.cov[1] * e.cov[1])
         / (pred[0] * pred[2] - pred[1] * pred[1]))
         .sqrt();
-    (moved < 0.25 * radius && (0.6..=1.6).contains(&size)).then_some(e.centre)
+    (moved < 0.6 * radius + 1.0 && (0.6..=1.6).contains(&size)).then_some(e.centre)
 }
 
 /// Full-resolution refinement of a pick; `None` when the marks cannot be measured.
