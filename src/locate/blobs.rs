@@ -60,30 +60,48 @@ fn merge(out: &mut Vec<Candidate>, more: Vec<Candidate>) {
 }
 
 /// Dark mask: value < 0.5 × the local white level (maximum over a window of side ≈ 7 %
-/// of the short side); keeps thin dark rings whole where the mean is pulled down.
+/// of the short side, taken on a grid of b×b block maxima); keeps thin dark rings whole
+/// where the mean is pulled down by a dark neighbourhood.
 fn dark_mask_white(g: &Gray<'_>) -> Vec<bool> {
     let (w, h) = (g.w, g.h);
     let r = ((0.035 * w.min(h) as f64).round() as usize).clamp(3, 100);
-    let rows: Vec<f32> = g
-        .data
-        .par_chunks(w)
-        .flat_map_iter(|row| sliding_max(row, r))
-        .collect();
-    let mut colmax = vec![0.0f32; w * h];
-    let mut col = vec![0.0f32; h];
-    for i in 0..w {
-        for j in 0..h {
-            col[j] = rows[j * w + i];
-        }
-        for (j, v) in sliding_max(&col, r).into_iter().enumerate() {
-            colmax[j * w + i] = v;
+    let b = (r / 4).max(1);
+    let (bw, bh) = (w.div_ceil(b), h.div_ceil(b));
+    let mut blocks = vec![f32::NEG_INFINITY; bw * bh];
+    for j in 0..h {
+        let row = &g.data[j * w..(j + 1) * w];
+        let brow = &mut blocks[(j / b) * bw..(j / b + 1) * bw];
+        for (i, &v) in row.iter().enumerate() {
+            let m = &mut brow[i / b];
+            if v > *m {
+                *m = v;
+            }
         }
     }
-    g.data
-        .iter()
-        .zip(&colmax)
-        .map(|(&v, &m)| v < 0.5 * m)
-        .collect()
+    let rb = r.div_ceil(b);
+    let mut rows = Vec::with_capacity(bw * bh);
+    for j in 0..bh {
+        rows.extend(sliding_max(&blocks[j * bw..(j + 1) * bw], rb));
+    }
+    let mut white = vec![0.0f32; bw * bh];
+    let mut col = vec![0.0f32; bh];
+    for i in 0..bw {
+        for j in 0..bh {
+            col[j] = rows[j * bw + i];
+        }
+        for (j, v) in sliding_max(&col, rb).into_iter().enumerate() {
+            white[j * bw + i] = v;
+        }
+    }
+    let mut mask = vec![false; w * h];
+    mask.par_chunks_mut(w).enumerate().for_each(|(j, m)| {
+        let wrow = &white[(j / b) * bw..(j / b + 1) * bw];
+        let row = &g.data[j * w..(j + 1) * w];
+        for (i, (mv, &v)) in m.iter_mut().zip(row).enumerate() {
+            *mv = v < 0.5 * wrow[i / b];
+        }
+    });
+    mask
 }
 
 /// Maximum over [i−r, i+r] (clamped), van Herk / Gil–Werman.
