@@ -139,7 +139,8 @@ fn sliding_max(x: &[f32], r: usize) -> Vec<f32> {
 }
 
 /// A fiducial sits alone on its white square (side two diameters): a disk-like blob with
-/// another blob reaching into that square is rejected (dot grids, text, textures).
+/// another disk-like blob of similar size reaching into that square is rejected (dense
+/// dot grids).
 fn mark_crowded(cands: &mut [Candidate]) {
     let radius_towards = |c: &Candidate, u: Point| {
         let [cxx, cxy, cyy] = c.cov_px2;
@@ -157,7 +158,10 @@ fn mark_crowded(cands: &mut [Candidate]) {
         .map(|(i, a)| {
             a.disk_like
                 && cands.iter().enumerate().any(|(j, b)| {
-                    if i == j {
+                    // Only another disk-like blob of comparable size counts (a dot grid);
+                    // fragments of a dark surround next to the chart do not.
+                    let ratio = mean_radius(b) / mean_radius(a);
+                    if i == j || !b.disk_like || !(0.5..=2.0).contains(&ratio) {
                         return false;
                     }
                     let d = [
