@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 mod batch;
 mod chart;
 mod exit;
+mod factors;
 mod measure;
 mod model;
 mod simulate;
@@ -20,6 +21,8 @@ struct Cli {
     command: Command,
 }
 
+// Built once per run: the size of the largest variant does not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Measure the MTF from a photograph of a sine chart.
