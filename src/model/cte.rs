@@ -18,7 +18,7 @@
 //! very small ε, since 1 − CTE loses digits). N is a whole number ≥ 0.
 
 use super::params::Params;
-use super::trig::{frac_prod, sin_pi, sincos_pi};
+use super::trig::{frac_prod, sin_pi, two_prod};
 use super::{Factor, ModelError};
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -50,11 +50,25 @@ pub struct Cte {
 impl Cte {
     /// OTF at x = f·pitch (cycles per pitch).
     pub fn otf_x(&self, x: f64) -> Complex64 {
+        self.otf_x2(x, 0.0)
+    }
+
+    /// OTF at x = xh + xl cycles per pitch, xl a tiny correction (|xl| ≤ ulp(xh)),
+    /// as from an error-free product f·pitch.
+    fn otf_x2(&self, xh: f64, xl: f64) -> Complex64 {
         let (n, c) = (self.n, self.cti);
         if n == 0.0 || c == 0.0 {
             return Complex64::new(1.0, 0.0);
         }
-        let s = sin_pi(x);
+        // An overflowed f·pitch is treated like every f64 beyond 2^53: an integer.
+        let (xh, xl) = if xh.is_finite() { (xh, xl) } else { (0.0, 0.0) };
+        // Everything but the N-turn shift is periodic in x with period 1:
+        // reduce x = xh + xl modulo 1 (each part exactly) into [−1/2, 1/2].
+        let xr = {
+            let r = (xh - xh.round()) + (xl - xl.round());
+            r - r.round()
+        };
+        let s = sin_pi(xr);
         let s2 = s * s;
         match self.model {
             CteModel::Exp => Complex64::new((-2.0 * n * c * s2).exp(), 0.0),
@@ -63,13 +77,15 @@ impl Cte {
                 if mag == 0.0 {
                     return Complex64::new(0.0, 0.0);
                 }
-                let sin2 = sincos_pi(2.0 * x).0;
+                let sin2 = sin_pi(2.0 * xr);
                 let phase = if c <= 0.5 {
                     n * (-c * sin2).atan2(1.0 - 2.0 * c * s2)
                 } else {
+                    // z = e^(−j2πx)·((1−d) + d·e^(j2πx)), d = 1 − c < 1/2.
                     let d = 1.0 - c;
                     let own = n * (d * sin2).atan2(1.0 - 2.0 * d * s2);
-                    own - 2.0 * PI * frac_prod(n, x)
+                    let turns = frac_prod(n, xh) + frac_prod(n, xl);
+                    own - 2.0 * PI * (turns - turns.round())
                 };
                 Complex64::from_polar(mag, phase)
             }
@@ -83,7 +99,8 @@ impl Factor for Cte {
     }
     fn otf(&self, u: f64, v: f64) -> Complex64 {
         let f = if self.along_v { v } else { u };
-        self.otf_x(f * self.pitch)
+        let (xh, xl) = two_prod(f, self.pitch);
+        self.otf_x2(xh, xl)
     }
 }
 

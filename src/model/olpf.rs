@@ -7,12 +7,12 @@
 //! - `4spot:d=..` or `4spot:dx=..,dy=..`: two crossed plates, four spots at the
 //!   corners of a dx×dy rectangle: cos(π·dx·u)·cos(π·dy·v).
 //!
-//! The cosines are evaluated in half-turns with exact range reduction, so
-//! they are exact even for huge arguments.
+//! The cosines are evaluated in half-turns of the exact product d·u, with
+//! exact range reduction, so they stay exact even for huge arguments.
 
 use super::params::Params;
 use super::spec::split_shape;
-use super::trig::cos_pi;
+use super::trig::cos_pi_prod;
 use super::{Factor, ModelError};
 use num_complex::Complex64;
 
@@ -30,7 +30,7 @@ impl Factor for Olpf {
         "olpf".into()
     }
     fn otf(&self, u: f64, v: f64) -> Complex64 {
-        Complex64::new(cos_pi(self.dx * u) * cos_pi(self.dy * v), 0.0)
+        Complex64::new(cos_pi_prod(self.dx, u) * cos_pi_prod(self.dy, v), 0.0)
     }
 }
 

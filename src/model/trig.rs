@@ -56,6 +56,16 @@ pub fn cos_pi(x: f64) -> f64 {
     sincos_pi(x).1
 }
 
+/// cos(π·a·b) for the exact product a·b (not its rounding): both parts of the
+/// error-free product are reduced modulo 2 exactly before they are added.
+pub fn cos_pi_prod(a: f64, b: f64) -> f64 {
+    let (p, e) = two_prod(a, b);
+    if !p.is_finite() {
+        return cos_pi(p);
+    }
+    cos_pi(p % 2.0 + e % 2.0)
+}
+
 /// Error-free product: returns (p, e) with p = fl(a·b) and a·b = p + e exactly
 /// (barring underflow).
 pub fn two_prod(a: f64, b: f64) -> (f64, f64) {
