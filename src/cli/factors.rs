@@ -101,6 +101,7 @@ impl FactorArgs {
     }
 
     /// Builds the system (see [`FactorArgs::build_named`]).
+    #[allow(dead_code)] // for `simulate` and `measure --model`
     pub fn build(&self) -> Result<System, CliError> {
         self.build_named().map(|(_, s)| s)
     }
