@@ -252,7 +252,7 @@ impl Factor for DefocusGeometric {
     }
     fn otf(&self, u: f64, v: f64) -> Complex64 {
         let rho = u.hypot(v);
-        Complex64::new(super::special::jinc(self.blur_mm * rho), 0.0)
+        Complex64::new(super::special::jinc(PI * self.blur_mm * rho), 0.0)
     }
 }
 

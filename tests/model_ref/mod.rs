@@ -48,6 +48,10 @@ impl DD {
         let (hi, lo) = two_prod(a, b);
         DD { hi, lo }
     }
+    /// self + a·b with the exact product.
+    pub fn add_prod(self, a: f64, b: f64) -> DD {
+        self + DD::prod(a, b)
+    }
     pub fn to_f64(self) -> f64 {
         self.hi + self.lo
     }
