@@ -3,7 +3,7 @@
 //! plot (PNG, or SVG by extension) with the Nyquist frequency marked when the
 //! system has a sampling grid.
 
-use super::model_io::{OutputError, encode_png, factor_columns, write_atomic};
+use super::model_io::{OutputError, encode_png, factor_columns, fmt_f64, write_atomic};
 use crate::model::System;
 use crate::plot::{FONT, ensure_font};
 use num_complex::Complex64;
@@ -135,15 +135,13 @@ pub fn cut_csv(cut: &Cut) -> String {
     for i in 0..cut.freq.len() {
         let (u, v) = cut.uv[i];
         let o = cut.otf[i];
-        out.push_str(&format!(
-            "{},{u},{v},{},{},{}",
-            cut.freq[i],
-            o.re,
-            o.im,
-            o.norm()
-        ));
+        let row = [cut.freq[i], u, v, o.re, o.im, o.norm()]
+            .map(fmt_f64)
+            .join(",");
+        out.push_str(&row);
         for (_, vals) in &cut.factors {
-            out.push_str(&format!(",{}", vals[i]));
+            out.push(',');
+            out.push_str(&fmt_f64(vals[i]));
         }
         out.push('\n');
     }

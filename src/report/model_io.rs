@@ -53,6 +53,18 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     Ok(())
 }
 
+/// Formats an f64 so that it reads back to the same value: Rust's shortest
+/// round-trip digits, plain (`0.25`, `300`) for ordinary magnitudes and in
+/// exponent form (`1e300`, `1.2e-19`) for very large or small ones.
+pub fn fmt_f64(x: f64) -> String {
+    let a = x.abs();
+    if a != 0.0 && a.is_finite() && !(1e-5..1e16).contains(&a) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 /// Encodes an RGB8 buffer of `w`×`h` pixels as PNG bytes.
 pub fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, String> {
     use image::ImageEncoder;
@@ -82,6 +94,27 @@ pub fn factor_columns(names: &[String]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_round_trip_compactly() {
+        for x in [
+            0.0,
+            1.0,
+            0.25,
+            300.0,
+            1e300,
+            5e-324,
+            -1.0359718658155233e-19,
+            0.1 + 0.2,
+            123456.789,
+        ] {
+            let s = fmt_f64(x);
+            assert_eq!(s.parse::<f64>().unwrap(), x, "{s}");
+            assert!(s.len() <= 24, "{s}");
+        }
+        assert_eq!(fmt_f64(300.0), "300");
+        assert_eq!(fmt_f64(1e300), "1e300");
+    }
 
     #[test]
     fn repeated_factor_names_get_numbers() {

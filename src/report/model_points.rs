@@ -3,7 +3,7 @@
 //! the total OTF and each factor's MTF, every number in Rust's shortest
 //! round-trip form.
 
-use super::model_io::{OutputError, factor_columns, write_atomic};
+use super::model_io::{OutputError, factor_columns, fmt_f64, write_atomic};
 use crate::model::System;
 use std::path::Path;
 
@@ -54,14 +54,15 @@ pub fn points_csv(system: &System, points: &[(f64, f64)]) -> String {
         for f in &system.factors {
             let o = f.otf(u, v);
             total *= o;
-            cols.push_str(&format!(",{}", o.norm()));
+            cols.push(',');
+            cols.push_str(&fmt_f64(o.norm()));
         }
-        out.push_str(&format!(
-            "{u},{v},{},{},{}{cols}\n",
-            total.re,
-            total.im,
-            total.norm()
-        ));
+        let row = [u, v, total.re, total.im, total.norm()]
+            .map(fmt_f64)
+            .join(",");
+        out.push_str(&row);
+        out.push_str(&cols);
+        out.push('\n');
     }
     out
 }
