@@ -257,7 +257,7 @@ impl Factor for DefocusGeometric {
 }
 
 /// Largest |W020| accepted for `defocus wave`, waves (beyond it use `geometric`).
-pub const MAX_W020_WAVES: f64 = 1000.0;
+pub const MAX_W020_WAVES: f64 = 100.0;
 
 /// Parses a `--defocus` spec (`wave:…` or `geometric:…`).
 pub fn parse_defocus(spec: &str) -> Result<Box<dyn Factor>, ModelError> {
@@ -332,6 +332,23 @@ mod tests {
         }
         assert_eq!(d.otf(0.0, 0.0).re, 1.0);
         assert_eq!(d.otf(5e-324, -5e-324).re, 1.0);
+    }
+
+    #[test]
+    fn defocus_specs_convert_focus_shift() {
+        // dz = 10 µm at f/2.8, 550 nm: W020 = dz/(8·F#²) = 0.1594 µm = 0.28989 waves.
+        let f = parse_defocus("wave:lambda=550nm,fnum=2.8,dz=10um").unwrap();
+        let g = DefocusWave::new(550e-6, 2.8, 0.01 / (8.0 * 2.8 * 2.8) / 550e-6);
+        for u in [10.0, 100.0, 300.0] {
+            assert!((f.otf(u, 0.0) - g.otf(u, 0.0)).norm() < 1e-15);
+        }
+        // Geometric: blur = dz/F# = 20 µm at dz = 80 µm, f/4.
+        let f = parse_defocus("geometric:dz=80um,fnum=4").unwrap();
+        let g = DefocusGeometric { blur_mm: 0.02 };
+        assert!((f.otf(50.0, 20.0) - g.otf(50.0, 20.0)).norm() < 1e-15);
+        assert!(parse_defocus("wave:lambda=550nm,fnum=4,w020=101").is_err());
+        assert!(parse_defocus("wave:lambda=550nm,fnum=4,w020=1,dz=1um").is_err());
+        assert!(parse_defocus("geometric:blur=1um,dz=1um,fnum=2").is_err());
     }
 
     #[test]

@@ -41,8 +41,17 @@ pub fn compute_map(system: &System, f_max: f64, size: usize) -> MtfMap {
         mtf: vec![0.0; size * size],
         nyquist: system.nyquist(),
     };
-    let coords: Vec<f64> = (0..size).map(|i| map.coord(i)).collect();
-    map.mtf
+    // Pixel centres symmetric about 0 exactly, so that row size−1−r is row r
+    // reversed: every real PSF has OTF(−u,−v) = conj OTF(u,v), hence equal MTF.
+    let mut coords: Vec<f64> = (0..size).map(|i| map.coord(i)).collect();
+    for i in 0..size / 2 {
+        coords[size - 1 - i] = -coords[i];
+    }
+    if size % 2 == 1 {
+        coords[size / 2] = 0.0;
+    }
+    let half = size.div_ceil(2);
+    map.mtf[..half * size]
         .par_chunks_mut(size)
         .enumerate()
         .for_each(|(row, out)| {
@@ -51,6 +60,15 @@ pub fn compute_map(system: &System, f_max: f64, size: usize) -> MtfMap {
                 *o = system.mtf(u, v);
             }
         });
+    let (top, bottom) = map.mtf.split_at_mut(half * size);
+    for (k, dst) in bottom.chunks_mut(size).enumerate() {
+        // bottom row k is image row half + k, the mirror of row size − 1 − (half + k).
+        let src_row = size - 1 - (half + k);
+        let src = &top[src_row * size..(src_row + 1) * size];
+        for (d, s) in dst.iter_mut().zip(src.iter().rev()) {
+            *d = *s;
+        }
+    }
     map
 }
 
@@ -247,6 +265,27 @@ pub fn write_map_png(map: &MtfMap, title: &str, path: &Path) -> Result<(), Outpu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn map_matches_direct_evaluation_including_the_mirrored_half() {
+        use crate::model::spec::parse_factor;
+        let system = System {
+            factors: vec![
+                parse_factor("aperture", "L:A=5um,B=5um,a=2um,b=1um").unwrap(),
+                parse_factor("cte", "n=100,cti=0.01,pitch=5um,model=exact").unwrap(),
+            ],
+        };
+        for size in [7, 8] {
+            let m = compute_map(&system, 300.0, size);
+            for r in 0..size {
+                for c in 0..size {
+                    let (u, v) = (m.coord(c), m.coord(size - 1 - r));
+                    let want = system.mtf(u, v);
+                    assert!((m.mtf[r * size + c] - want).abs() < 1e-14, "{size} {r} {c}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn viridis_ends() {
