@@ -263,16 +263,39 @@ impl Polygon {
     fn edges(&self, u: f64, v: f64, f: f64) -> Complex64 {
         let (fx, fy) = (u / f, v / f);
         let n = self.verts.len();
+        // zⱼ = e^(iπ f·rⱼ), one sincospi per vertex; the edge phase
+        // e^(−i2π f·m) = conj(zₐ·z_b) and, where |f·e| ≥ 1/4, the sinc numerator
+        // sin(π f·e) = Im(z_b·conj zₐ) come from products (no cancellation there)
+        let phase = |p: [f64; 2]| u * p[0] + v * p[1];
+        let p0 = phase(self.verts[0]);
+        let (s0, c0) = sincospi(p0);
+        let (mut pa, mut sa, mut ca) = (p0, s0, c0);
         let mut re = 0.0;
         let mut im = 0.0;
         for j in 0..n {
             let a = self.verts[j];
+            let (pb, sb, cb) = if j + 1 == n {
+                (p0, s0, c0)
+            } else {
+                let pb = phase(self.verts[j + 1]);
+                let (sb, cb) = sincospi(pb);
+                (pb, sb, cb)
+            };
             let b = self.verts[(j + 1) % n];
             let e = sub(b, a);
-            let w = (fx * e[1] - fy * e[0]) * sinc(u * e[0] + v * e[1]);
-            let (s, c) = sincospi(u * (a[0] + b[0]) + v * (a[1] + b[1])); // 2 f·m
+            let t = pb - pa;
+            let sinc_fe = if t.abs() >= 0.25 {
+                (sb * ca - cb * sa) / (PI * t)
+            } else {
+                sinc(u * e[0] + v * e[1])
+            };
+            let w = (fx * e[1] - fy * e[0]) * sinc_fe;
+            // e^(−iπ(pₐ+p_b)) = conj(zₐ z_b)
+            let c = ca * cb - sa * sb;
+            let s = sa * cb + ca * sb;
             re += w * c;
             im -= w * s;
+            (pa, sa, ca) = (pb, sb, cb);
         }
         // multiply by i/(2π f)
         let k = 1.0 / (2.0 * PI * f);
