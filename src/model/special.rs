@@ -101,19 +101,6 @@ pub fn sinc(x: f64) -> f64 {
     sinpi(a) / (PI * a)
 }
 
-/// Unnormalised sin(x)/x with value 1 at 0 (x in radians).
-pub fn sin_over_x(x: f64) -> f64 {
-    let a = x.abs();
-    if a < 1e-4 {
-        let y2 = a * a;
-        return 1.0 - y2 / 6.0 * (1.0 - y2 / 20.0);
-    }
-    if !a.is_finite() {
-        return 0.0;
-    }
-    a.sin() / a
-}
-
 /// Below this argument J₁ and jinc use their power series.
 const SERIES_MAX: f64 = 2.0;
 /// At and above this argument J₁ and jinc use Hankel's asymptotic expansion.

@@ -225,20 +225,35 @@ impl Polygon {
                 break;
             }
         }
-        for j in 0..n {
-            let a = self.verts[j];
-            let b = self.verts[(j + 1) % n];
-            let tri = 0.5 * cross(a, b);
-            let x = qx * a[0] + qy * a[1];
-            let y = qx * b[0] + qy * b[1];
-            let mut h = 1.0;
-            let mut ypow = 1.0;
-            s[0] += tri;
-            for sk in s.iter_mut().take(n_max + 1).skip(1) {
-                ypow *= y;
-                h = x * h + ypow;
-                *sk += tri * h;
+        // edges in chunks of LANES so the hₙ recurrences of different edges
+        // run side by side instead of one long dependency chain
+        const LANES: usize = 8;
+        let mut j0 = 0;
+        while j0 < n {
+            let m = LANES.min(n - j0);
+            let mut tri = [0.0f64; LANES];
+            let mut x = [0.0f64; LANES];
+            let mut y = [0.0f64; LANES];
+            for l in 0..m {
+                let a = self.verts[j0 + l];
+                let b = self.verts[(j0 + l + 1) % n];
+                tri[l] = 0.5 * cross(a, b);
+                x[l] = qx * a[0] + qy * a[1];
+                y[l] = qx * b[0] + qy * b[1];
             }
+            let mut h = [1.0f64; LANES];
+            let mut ypow = [1.0f64; LANES];
+            s[0] += tri.iter().sum::<f64>();
+            for sk in s.iter_mut().take(n_max + 1).skip(1) {
+                let mut acc = 0.0;
+                for l in 0..LANES {
+                    ypow[l] *= y[l];
+                    h[l] = x[l] * h[l] + ypow[l];
+                    acc += tri[l] * h[l];
+                }
+                *sk += acc;
+            }
+            j0 += m;
         }
         // Σ (−i)^n · 2/(n+2)! · S_n
         let mut re = 0.0;
