@@ -447,13 +447,15 @@ pub fn layout(spec: &ChartSpec) -> Result<Chart, ChartError> {
     }
     // Grey row: black, steps, white.
     let c0 = spec.contrasts[0];
-    let mut greys: Vec<(String, f64)> = vec![("black".into(), spec.mean * (1.0 - c0))];
+    let (black, white) = (spec.mean * (1.0 - c0), spec.mean * (1.0 + c0));
+    let mut greys: Vec<(String, f64)> = vec![("black".into(), black), ("white".into(), white)];
     for &g in &GREY_STEPS {
-        if g > spec.darkest {
+        // Steps the printer can make and that do not repeat black or white.
+        if g > spec.darkest && (g - black).abs() > 0.015 && (g - white).abs() > 0.015 {
             greys.push((format!("grey{g}"), g));
         }
     }
-    greys.push(("white".into(), spec.mean * (1.0 + c0)));
+    greys.sort_by(|a, b| a.1.total_cmp(&b.1));
     let k = greys.len();
     let gg = (0.4 * th).max(1.0);
     let gw = (strip_w - (k as f64 - 1.0) * gg) / k as f64;
