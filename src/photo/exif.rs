@@ -183,8 +183,13 @@ impl ExifFacts {
             ));
             None
         } else if v == 0.0 {
+            let hint = if name == "FNumber" || name == "FocalLength" {
+                ", e.g. a manual lens or an adapter"
+            } else {
+                ""
+            };
             self.warnings.push(format!(
-                "{name} is 0 in the EXIF (not recorded, e.g. a manual lens or an adapter): ignored as absent"
+                "{name} is 0 in the EXIF (not recorded{hint}): ignored as absent"
             ));
             None
         } else if !(v > low && v <= high) {
@@ -243,7 +248,10 @@ pub fn read_facts(path: &Path) -> Result<ExifFacts, ExifError> {
     if super::raw::is_raw_path(path) {
         return super::raw::read_raw_facts(path).map_err(|e| ExifError::Io {
             path: path.display().to_string(),
-            cause: e.to_string(),
+            cause: match e {
+                super::raw::RawError::Io { cause, .. } => cause,
+                other => other.to_string(),
+            },
         });
     }
     let file = std::fs::File::open(path).map_err(|e| ExifError::Io {

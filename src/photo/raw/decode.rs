@@ -36,6 +36,14 @@ pub enum RawError {
         /// What is not supported.
         what: String,
     },
+    /// The file is not a camera raw the decoder recognises (no make or model found).
+    #[error("{path}: not a camera raw format the decoder recognises ({what})")]
+    Unrecognised {
+        /// The file.
+        path: String,
+        /// What the decoder reported.
+        what: String,
+    },
     /// The file is damaged or not what its name says.
     #[error("{path}: corrupt or unreadable raw data: {cause}")]
     Corrupt {
@@ -100,14 +108,25 @@ fn map_error(path: &Path, e: RawlerError, facts: &ExifFacts) -> RawError {
             let model = clean_text(&model)
                 .or_else(|| facts.model.clone())
                 .unwrap_or_default();
-            RawError::Unsupported {
-                path,
-                make,
-                model,
-                what,
+            if make.is_empty() && model.is_empty() {
+                RawError::Unrecognised { path, what }
+            } else {
+                RawError::Unsupported {
+                    path,
+                    make,
+                    model,
+                    what,
+                }
             }
         }
-        RawlerError::DecoderFailed(cause) => RawError::Corrupt { path, cause },
+        RawlerError::DecoderFailed(cause) => RawError::Corrupt {
+            path,
+            cause: if cause.contains("EOF") {
+                format!("the file is truncated ({cause})")
+            } else {
+                cause
+            },
+        },
     }
 }
 
@@ -139,6 +158,12 @@ fn facts_of(meta: Option<&RawMetadata>, bytes: &[u8], make: &str, model: &str) -
                 .or(e.iso_speed)
                 .or(e.recommended_exposure_index),
         );
+    }
+    if let Some(tiff) = try_facts_from_bytes(bytes) {
+        f.fill_from(tiff);
+    }
+    // rawler's cleaned-up names only where the file itself names nothing.
+    if let Some(m) = meta {
         if f.make.is_none() {
             f.make = clean_text(&m.make);
         }
@@ -146,24 +171,28 @@ fn facts_of(meta: Option<&RawMetadata>, bytes: &[u8], make: &str, model: &str) -
             f.model = clean_text(&m.model);
         }
     }
-    if let Some(mut tiff) = try_facts_from_bytes(bytes) {
-        // The raw frame is the sensor: sizes from IFD0 describe the raw buffer
-        // or a preview, not a developed image; keep only PixelX/YDimension-like sizes.
-        tiff.from_raw = true;
-        f.fill_from(tiff);
-    }
     f
 }
 
 /// Reads the EXIF facts of a raw file without decoding its image data.
 pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
-    let src = open(path)?;
+    let src = match open(path) {
+        Ok(src) => src,
+        Err(RawError::Corrupt { cause, .. }) => {
+            return Ok(ExifFacts {
+                from_raw: true,
+                warnings: vec![format!("no EXIF: {cause}")],
+                ..ExifFacts::default()
+            });
+        }
+        Err(e) => return Err(e),
+    };
     let outcome = guard::contain(|| {
         let decoder = rawler::get_decoder(&src)?;
         decoder.raw_metadata(&src, &RawDecodeParams::default())
     });
     match outcome {
-        Ok(Ok(meta)) => Ok(facts_of(Some(&meta), src.buf(), &meta.make, &meta.model)),
+        Ok(Ok(meta)) => Ok(facts_of(Some(&meta), src.buf(), "", "")),
         // No rawler metadata: fall back on the TIFF EXIF alone.
         Ok(Err(_)) | Err(_) => {
             let mut f = facts_of(None, src.buf(), "", "");
