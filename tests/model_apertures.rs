@@ -706,3 +706,68 @@ fn spec_parsers_build_the_same_factors() {
         HexGrid::new(0.005, Rows::X).unwrap().otf(77.0, 3.0)
     );
 }
+
+#[test]
+fn polygon_across_the_series_edge_switch_and_slender() {
+    // the moment series is used up to 2π|f|R = 4, R the largest vertex distance
+    // from the bounding-box centre; probe both sides of the switch
+    let shapes: Vec<(&str, Shape)> = vec![
+        (
+            "triangle",
+            vec![[0.0, 0.0], [0.004, 0.0005], [0.001, 0.003]],
+        ),
+        ("L", l_poly(0.005, 0.006, 0.002, 0.0015)),
+        ("slender 100:1 rect", rect_poly(0.01, 0.0001)),
+        (
+            "slender 50:1 tilted parallelogram",
+            vec![
+                [0.0, 0.0],
+                [0.008, 0.006],
+                [0.0081, 0.0062],
+                [0.0001, 0.0002],
+            ],
+        ),
+    ];
+    let mut worst_all: f64 = 0.0;
+    for (label, poly) in shapes {
+        let f = Polygon::new(poly.clone()).unwrap();
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for p in &poly {
+            x0 = x0.min(p[0]);
+            x1 = x1.max(p[0]);
+            y0 = y0.min(p[1]);
+            y1 = y1.max(p[1]);
+        }
+        let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        let r = poly
+            .iter()
+            .map(|p| (p[0] - cx).hypot(p[1] - cy))
+            .fold(0.0, f64::max);
+        let f_switch = 4.0 / (2.0 * PI * r);
+        let mut pts = Vec::new();
+        for k in 0..24 {
+            let th = PI * k as f64 / 12.0 + 0.01;
+            for s in [
+                1.0 - 1e-9,
+                1.0 - 1e-15,
+                1.0,
+                1.0 + 1e-15,
+                1.0 + 1e-9,
+                0.5,
+                2.0,
+                10.0,
+            ] {
+                pts.push((f_switch * s * th.cos(), f_switch * s * th.sin()));
+            }
+        }
+        let d = x1 - x0;
+        pts.extend(stiff_points(d));
+        let (err, at) = worst(&f, |u, v| polygon_ref(&poly, u, v), &pts);
+        eprintln!(
+            "polygon {label:<34} worst |ΔOTF| = {err:.2e} at ({:.3e}, {:.3e}) cy/mm",
+            at.0, at.1
+        );
+        worst_all = worst_all.max(err);
+        assert!(err <= BAR, "{label}: {err:e} at {at:?}");
+    }
+}

@@ -42,7 +42,7 @@ impl Factor for RectGrid {
     }
 
     fn otf(&self, u: f64, v: f64) -> Complex64 {
-        if u.hypot(v) * self.px.min(self.py) > FAR {
+        if u.abs().max(v.abs()) * self.px.min(self.py) > FAR {
             return Complex64::new(0.0, 0.0);
         }
         Complex64::new(sinc(self.px * u) * sinc(self.py * v), 0.0)
@@ -88,7 +88,7 @@ impl Factor for HexGrid {
     }
 
     fn otf(&self, u: f64, v: f64) -> Complex64 {
-        if u.hypot(v) * 0.25 * self.pitch > FAR {
+        if u.abs().max(v.abs()) * 0.25 * self.pitch > FAR {
             return Complex64::new(0.0, 0.0);
         }
         let (u, v) = match self.rows {

@@ -8,7 +8,7 @@
 //! positive weight, so nothing cancels even when the notch nearly fills the box.
 
 use super::guard::{check_length, far};
-use crate::model::special::{cospi, sinc, sinpi};
+use crate::model::special::{sinc, sincospi};
 use crate::model::{Factor, ModelError};
 use num_complex::Complex64;
 
@@ -26,7 +26,8 @@ impl Part {
     fn otf(&self, u: f64, v: f64) -> Complex64 {
         let mag = self.weight * sinc(self.w * u) * sinc(self.h * v);
         let phase = 2.0 * (u * self.cx + v * self.cy);
-        Complex64::new(mag * cospi(phase), -mag * sinpi(phase))
+        let (s, c) = sincospi(phase);
+        Complex64::new(mag * c, -mag * s)
     }
 }
 
