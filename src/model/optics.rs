@@ -18,7 +18,7 @@
 //!   of `--optics diffraction`, not together with it. `dz` is the image-side
 //!   focus shift: W020 = dz/(8·F#²) (as a length), in waves divided by λ.
 //!   The integral is done by composite 20-point Gauss–Legendre with panels
-//!   short enough that the phase turns by at most 2 rad in each.
+//!   short enough that the phase turns by at most 8 rad in each.
 //! - `geometric:blur=<diameter>` or `geometric:dz=..,fnum=..` (blur = |dz|/F#):
 //!   the geometric-optics blur disk, a uniform disk of that diameter,
 //!   OTF = 2J₁(πdρ)/(πdρ). It excludes diffraction and multiplies with
@@ -170,6 +170,9 @@ fn gauss_legendre_20() -> &'static ([f64; 20], [f64; 20]) {
     })
 }
 
+/// Phase turn (radians) covered by one 20-point Gauss–Legendre panel of the defocus integral.
+const PANEL_PHASE: f64 = 8.0;
+
 /// Defocused diffraction-limited circular pupil (exact, Hopkins).
 #[derive(Debug, Clone)]
 pub struct DefocusWave {
@@ -208,18 +211,19 @@ impl DefocusWave {
             return diffraction_otf_t(t);
         }
         let (xs, ws) = gauss_legendre_20();
+        // The phase a·(cos θ − s) turns by at most |a|·sin β·β over [0, β];
+        // one 20-point panel per PANEL_PHASE radians of it.
         let phase_span = a.abs() * beta.sin() * beta;
-        let panels = (phase_span / 2.0).ceil().clamp(1.0, 1e6) as usize;
+        let panels = (phase_span / PANEL_PHASE).ceil().clamp(1.0, 1e6) as usize;
         let h = beta / panels as f64;
         let mut total = 0.0;
         for k in 0..panels {
             let mid = (k as f64 + 0.5) * h;
             let mut sum = 0.0;
             for (x, w) in xs.iter().zip(ws) {
-                let th = mid + 0.5 * h * x;
-                let st = th.sin();
-                // cos θ − s = (1 − s) − (1 − cos θ) = t − 2 sin²(θ/2)
-                let sh = (0.5 * th).sin();
+                let (sh, ch) = (0.5 * (mid + 0.5 * h * x)).sin_cos();
+                // sin θ = 2 sin(θ/2) cos(θ/2); cos θ − s = t − 2 sin²(θ/2).
+                let st = 2.0 * sh * ch;
                 let d = t - 2.0 * sh * sh;
                 sum += w * (a * d).cos() * st * st;
             }
