@@ -618,6 +618,56 @@ mod tests {
     }
 
     #[test]
+    fn marks_stay_on_background_for_many_layouts() {
+        // Every label box and tick (sampled on a grid) lies inside the page, on
+        // background, and outside every fiducial's keep-out square.
+        for (w, h) in [
+            (297.0, 210.0),
+            (420.0, 297.0),
+            (210.0, 148.0),
+            (120.0, 80.0),
+            (600.0, 200.0),
+        ] {
+            for law in [Law::Log, Law::Linear, Law::Patches] {
+                for contrasts in [vec![0.8], vec![0.8, 0.4, 0.2]] {
+                    let mut s = ChartSpec::new(law, 0.3, 4.0);
+                    s.width_mm = w;
+                    s.height_mm = h;
+                    s.contrasts = contrasts;
+                    let c = layout(&s).unwrap();
+                    let t = &c.target;
+                    let rects = c
+                        .texts
+                        .iter()
+                        .map(|l| l.rect())
+                        .chain(c.ticks.iter().copied());
+                    for r in rects {
+                        for a in 0..=8 {
+                            for b in 0..=4 {
+                                let x = r.x_mm + r.width_mm * a as f64 / 8.0;
+                                let y = r.y_mm + r.height_mm * b as f64 / 4.0;
+                                assert!(
+                                    x >= 0.0 && x <= w && y >= 0.0 && y <= h,
+                                    "{w}×{h} {law:?}"
+                                );
+                                assert_eq!(t.reflectance(x, y), 1.0, "{w}×{h} {law:?} at {x},{y}");
+                                for f in &t.fiducials {
+                                    let d = f.diameter_mm;
+                                    assert!(
+                                        (x - f.x_mm).abs() >= d || (y - f.y_mm).abs() >= d,
+                                        "{w}×{h} {law:?}: mark at {x},{y} near {}",
+                                        f.id
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn refuses_under_two_dots_and_warns_under_four() {
         let mut s = ChartSpec::new(Law::Linear, 1.0, 10.0);
         s.dpi = 100; // 3.94 dots/mm: 0.39 dots per cycle at 10 cy/mm
