@@ -182,6 +182,9 @@ pub struct RenderSettings {
     pub margin_px: usize,
     /// FFT size of one tile along each axis, fine-grid samples (a power of two works best).
     pub fft_size: usize,
+    /// Sub-samples per side of a fine cell that a hard edge crosses (area
+    /// sampling of edges; 1 = point sampling everywhere).
+    pub edge_subsamples: usize,
 }
 
 impl Default for RenderSettings {
@@ -190,6 +193,7 @@ impl Default for RenderSettings {
             oversample: 2,
             margin_px: 16,
             fft_size: 512,
+            edge_subsamples: 8,
         }
     }
 }
@@ -440,6 +444,12 @@ impl Camera {
         let r = &self.render;
         if !(1..=16).contains(&r.oversample) {
             return bad(format!("oversampling {} must lie in 1–16", r.oversample));
+        }
+        if !(1..=64).contains(&r.edge_subsamples) {
+            return bad(format!(
+                "edge sub-samples {} must lie in 1–64",
+                r.edge_subsamples
+            ));
         }
         if r.fft_size < 16 || r.tile_px() < 8 {
             return bad(format!(

@@ -280,17 +280,32 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SimError> {
     })
 }
 
+/// Checks that `camera`'s encoding can be written under the name `path` (before rendering).
+pub fn check_output(camera: &Camera, path: &Path) -> Result<PhotoFormat, SimError> {
+    let format = PhotoFormat::from_path(path)?;
+    let shown = path.display();
+    match format {
+        PhotoFormat::Jpeg if camera.bayer.is_some() => Err(SimError::Parameter(format!(
+            "{shown}: a Bayer mosaic is written as 16-bit linear PNG or TIFF, not JPEG"
+        ))),
+        PhotoFormat::Jpeg if camera.bits != 8 => Err(SimError::Parameter(format!(
+            "{shown}: JPEG stores 8 bits; use --bits 8 or a .png/.tif name"
+        ))),
+        PhotoFormat::Png | PhotoFormat::Tiff if camera.jpeg_quality.is_some() => {
+            Err(SimError::Parameter(format!(
+                "{shown}: a JPEG quality was given but the name does not end in .jpg"
+            )))
+        }
+        f => Ok(f),
+    }
+}
+
 /// Writes the photo to `path` (format from its extension), `STEM.truth.csv`
 /// (first sweep; others as `STEM.truth.ID.csv`) and `STEM.json`, each atomically;
 /// everything is encoded before the first file is written.
 pub fn write_shot(shot: &Shot, path: &Path) -> Result<(), SimError> {
+    check_output(&shot.camera, path)?;
     let format = PhotoFormat::from_path(path)?;
-    if format != PhotoFormat::Jpeg && shot.camera.jpeg_quality.is_some() {
-        return Err(SimError::Parameter(format!(
-            "{}: a JPEG quality was given but the name does not end in .jpg",
-            path.display()
-        )));
-    }
     let photo = shot.encode(format)?;
     let (_, csv_path, json_path) = output_paths(path);
     let photo_name = path

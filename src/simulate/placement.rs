@@ -1,6 +1,7 @@
 //! Where the chart sits in the frame: the homography from the target's own
 //! frame (mm, origin top-left, y down) to image pixels, built from the chart's
-//! scale (its width in pixels, or magnification and pixel pitch), a perspective
+//! scale (its width in pixels, or magnification and pixel pitch; by default
+//! its placed bounding box fills 80 % of the frame), a perspective
 //! tilt of the chart plane about an axis through its centre (pinhole camera of
 //! focal length `focal_px`), a rotation on screen and an offset from the frame
 //! centre. The four corners of the target are mapped through that exact chain;
@@ -61,24 +62,43 @@ fn map_point(
 }
 
 /// Scale of the chart in the image (px per chart mm) from the camera's settings.
-fn scale(camera: &Camera, target: &Target) -> f64 {
+fn scale(camera: &Camera, target: &Target, f: f64) -> Result<f64, SimError> {
     if let Some(n) = camera.chart_px {
-        n / target.width_mm
-    } else if let Some(m) = camera.magnification {
-        m / camera.pitch_mm()
-    } else {
-        // Default: the target fills 80 % of the frame in its tighter direction.
-        0.8 * (camera.width_px as f64 / target.width_mm)
-            .min(camera.height_px as f64 / target.height_mm)
+        return Ok(n / target.width_mm);
     }
+    if let Some(m) = camera.magnification {
+        return Ok(m / camera.pitch_mm());
+    }
+    // Default: the placed target's bounding box (after tilt and rotation) fills
+    // 80 % of the frame in its tighter direction; a few fixed-point steps settle
+    // the perspective's dependence on scale.
+    let (w, h) = (camera.width_px as f64, camera.height_px as f64);
+    let mut s = 0.8 * (w / target.width_mm).min(h / target.height_mm);
+    for _ in 0..8 {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for p in rect_corners(0.0, 0.0, target.width_mm, target.height_mm) {
+            let q = map_point(camera, target, s, f, p)?;
+            for a in 0..2 {
+                lo[a] = lo[a].min(q[a]);
+                hi[a] = hi[a].max(q[a]);
+            }
+        }
+        let q = ((hi[0] - lo[0]) / (0.8 * w)).max((hi[1] - lo[1]) / (0.8 * h));
+        if (q - 1.0).abs() < 1e-9 {
+            break;
+        }
+        s /= q;
+    }
+    Ok(s)
 }
 
 /// Places `target` in the frame of `camera`; errors if the target leaves the frame.
 pub fn place(camera: &Camera, target: &Target) -> Result<Placement, SimError> {
-    let s = scale(camera, target);
     let f = camera
         .focal_px
         .unwrap_or_else(|| (camera.width_px as f64).hypot(camera.height_px as f64));
+    let s = scale(camera, target, f)?;
     let src = rect_corners(0.0, 0.0, target.width_mm, target.height_mm);
     let mut dst = [[0.0; 2]; 4];
     for (d, p) in dst.iter_mut().zip(src.iter()) {

@@ -141,6 +141,9 @@ struct Scratch {
     col: Vec<Complex64>,
     row: Vec<f64>,
     fft_scratch: Vec<Complex64>,
+    /// Region ids on the fine-cell corners above and below the current row (n + 1 each).
+    ids: Vec<u32>,
+    ids_below: Vec<u32>,
 }
 
 impl Plan {
@@ -191,6 +194,8 @@ impl Plan {
             col: vec![Complex64::new(0.0, 0.0); self.n],
             row: vec![0.0; self.n],
             fft_scratch: vec![Complex64::new(0.0, 0.0); len],
+            ids: vec![0; self.n + 1],
+            ids_below: vec![0; self.n + 1],
         }
     }
 }
@@ -200,20 +205,78 @@ struct Scene<'a> {
     target: &'a Target,
     image_to_chart: Homography,
     surround: f64,
+    /// Sub-samples per fine-cell side where a cell straddles a region boundary.
+    edge_subsamples: usize,
 }
 
 impl Scene<'_> {
     #[inline]
-    fn at(&self, x: f64, y: f64) -> f64 {
+    fn chart(&self, x: f64, y: f64) -> (f64, f64) {
         let m = &self.image_to_chart.m;
         let w = m[6] * x + m[7] * y + m[8];
-        let cx = (m[0] * x + m[1] * y + m[2]) / w;
-        let cy = (m[3] * x + m[4] * y + m[5]) / w;
-        if cx >= 0.0 && cy >= 0.0 && cx < self.target.width_mm && cy < self.target.height_mm {
+        (
+            (m[0] * x + m[1] * y + m[2]) / w,
+            (m[3] * x + m[4] * y + m[5]) / w,
+        )
+    }
+
+    #[inline]
+    fn inside(&self, cx: f64, cy: f64) -> bool {
+        cx >= 0.0 && cy >= 0.0 && cx < self.target.width_mm && cy < self.target.height_mm
+    }
+
+    /// Reflectance at image point (x, y): the target inside its frame, the surround outside.
+    #[inline]
+    fn at(&self, x: f64, y: f64) -> f64 {
+        let (cx, cy) = self.chart(x, y);
+        if self.inside(cx, cy) {
             self.target.reflectance(cx, cy)
         } else {
             self.surround
         }
+    }
+
+    /// Which piece of the chart's layout holds image point (x, y), in the
+    /// painting order of `Target::reflectance`: equal ids on a cell's four
+    /// corners mean no hard edge crosses it (regions are far wider than a cell).
+    fn region(&self, x: f64, y: f64) -> u32 {
+        let (cx, cy) = self.chart(x, y);
+        if !self.inside(cx, cy) {
+            return 0;
+        }
+        let t = self.target;
+        for (i, f) in t.fiducials.iter().enumerate() {
+            if let Some(v) = f.reflectance_at(cx, cy) {
+                return 1_000 + 2 * i as u32 + (v > 0.5) as u32;
+            }
+        }
+        if let Some(i) = t.sweeps.iter().position(|s| s.rect.contains(cx, cy)) {
+            return 2_000 + i as u32;
+        }
+        if let Some(i) = t.patches.iter().position(|p| p.rect.contains(cx, cy)) {
+            return 3_000 + i as u32;
+        }
+        if let Some(i) = t.greys.iter().position(|g| g.rect.contains(cx, cy)) {
+            return 4_000 + i as u32;
+        }
+        1
+    }
+
+    /// Mean reflectance over the fine cell of side `h` centred on (x, y), by
+    /// s² sub-samples on an N-rooks pattern (every sample in its own column and
+    /// row stratum of s², so an axis-near edge's coverage is resolved to 1/s² of the cell).
+    fn cell_mean(&self, x: f64, y: f64, h: f64) -> f64 {
+        let s = self.edge_subsamples;
+        let n2 = (s * s) as f64;
+        let mut acc = 0.0;
+        for b in 0..s {
+            for a in 0..s {
+                let u = (a * s + b) as f64 + 0.5;
+                let v = (b * s + a) as f64 + 0.5;
+                acc += self.at(x + h * (u / n2 - 0.5), y + h * (v / n2 - 0.5));
+            }
+        }
+        acc / n2
     }
 }
 
@@ -236,8 +299,32 @@ fn render_tile(
         .enumerate()
     {
         let y = y0 + j as f64 * step;
-        for (i, v) in row.iter_mut().enumerate() {
-            *v = scene.at(x0 + i as f64 * step, y);
+        if scene.edge_subsamples > 1 {
+            // Region ids on the cell corners of this row: above (`s.ids`) and below.
+            let corner_y = y + 0.5 * step;
+            if j == 0 {
+                for (i, id) in s.ids.iter_mut().enumerate() {
+                    *id = scene.region(x0 + (i as f64 - 0.5) * step, y - 0.5 * step);
+                }
+            }
+            for (i, id) in s.ids_below.iter_mut().enumerate() {
+                *id = scene.region(x0 + (i as f64 - 0.5) * step, corner_y);
+            }
+            for (i, v) in row.iter_mut().enumerate() {
+                let x = x0 + i as f64 * step;
+                let a = s.ids[i];
+                let edge = s.ids[i + 1] != a || s.ids_below[i] != a || s.ids_below[i + 1] != a;
+                *v = if edge {
+                    scene.cell_mean(x, y, step)
+                } else {
+                    scene.at(x, y)
+                };
+            }
+            std::mem::swap(&mut s.ids, &mut s.ids_below);
+        } else {
+            for (i, v) in row.iter_mut().enumerate() {
+                *v = scene.at(x0 + i as f64 * step, y);
+            }
         }
         plan.r2c
             .process_with_scratch(row, spec_row, &mut s.fft_scratch)
@@ -291,6 +378,7 @@ pub fn render_reflectance(
         target,
         image_to_chart,
         surround: camera.surround,
+        edge_subsamples: camera.render.edge_subsamples,
     };
     let (w, h) = (camera.width_px, camera.height_px);
     let t = plan.tile;
