@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 mod batch;
 mod chart;
 mod exit;
+mod factors;
 mod measure;
 mod model;
 mod simulate;
@@ -21,6 +22,7 @@ struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once; boxing buys nothing
 enum Command {
     /// Measure the MTF from a photograph of a sine chart.
     Measure(measure::Args),
