@@ -110,6 +110,12 @@ pub struct Args {
     /// Renderer: tile overlap, pixels.
     #[arg(long, value_name = "PX", default_value_t = RenderSettings::default().margin_px)]
     pub margin: usize,
+    /// Detector aperture (model factor), e.g. rect:A=4um,B=4um; replaces the default square pixel.
+    #[arg(long, value_name = "SPEC")]
+    pub aperture: Vec<String>,
+    /// Gaussian blur of the optics: sigma=LENGTH (e.g. sigma=2um).
+    #[arg(long, value_name = "SPEC")]
+    pub gaussian: Vec<String>,
     /// The photo to write: .png, .jpg or .tif; STEM.truth.csv and STEM.json go beside it.
     #[arg(short = 'o', long = "output", value_name = "STEM.png|.jpg|.tif")]
     pub output: PathBuf,
@@ -239,9 +245,26 @@ fn camera(a: &Args) -> Result<Camera, CliError> {
     })
 }
 
-/// The model system named by the flags (none yet: a perfect lens; the pixel aperture is the camera's).
-fn system(_a: &Args) -> Result<System, CliError> {
-    Ok(System::default())
+/// The model system named by the flags (none: a perfect lens; the pixel aperture is the camera's).
+fn system(a: &Args) -> Result<System, CliError> {
+    let mut sys = System::default();
+    for spec in &a.aperture {
+        sys.factors.push(
+            sweepmtf::model::aperture::parse(spec)
+                .map_err(|e| usage(format!("--aperture {spec}: {e}")))?,
+        );
+    }
+    for spec in &a.gaussian {
+        let p = sweepmtf::model::params::Params::parse("gaussian", spec)
+            .map_err(|e| usage(format!("--gaussian {spec}: {e}")))?;
+        let sigma_mm = p
+            .positive_length("sigma")
+            .and_then(|s| p.finish(&["sigma"]).map(|_| s))
+            .map_err(|e| usage(format!("--gaussian {spec}: {e}")))?;
+        sys.factors
+            .push(Box::new(simulate::demo::GaussianPsf { sigma_mm }));
+    }
+    Ok(sys)
 }
 
 /// Runs `sweepmtf simulate`; every error message is folded onto one line.
