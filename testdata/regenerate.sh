@@ -4,7 +4,7 @@
 # repository root: sh testdata/regenerate.sh
 set -e
 S="${SWEEPMTF:-cargo run --release --quiet --} simulate"
-OPT="--gaussian sigma=1.2um"
+OPT="--system targets/systems/aps_c_f4.toml"
 
 # Log sweep, 8-bit sRGB JPEG at quality 90, mild shot and read noise (the README's main command).
 $S --target demo:log $OPT --size 1200x800 --full-well 20000 --read-noise 4 --seed 1 \
