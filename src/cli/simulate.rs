@@ -287,11 +287,10 @@ fn run_inner(a: &Args) -> Result<(), CliError> {
     simulate::check_output(&cam, &a.output).map_err(sim_error)?;
     let target = load_target(&a.target)?;
     let shot = simulate::render(&target, &system, &cam).map_err(sim_error)?;
-    simulate::write_shot(&shot, &a.output).map_err(sim_error)?;
+    let written = simulate::write_shot(&shot, &a.output).map_err(sim_error)?;
     for w in &shot.warnings {
         eprintln!("sweepmtf: warning: {w}");
     }
-    let (_, csv, json) = simulate::output_paths(&a.output);
     let mtf_nyq = shot.truth().and_then(|t| {
         t.rows
             .windows(2)
@@ -299,17 +298,19 @@ fn run_inner(a: &Args) -> Result<(), CliError> {
             .map(|w| w[0].mtf)
     });
     println!(
-        "simulate: {} ({}×{} px, pitch {} µm), truth {}, settings {}; factors: {}{}",
-        a.output.display(),
+        "simulate: {}×{} px, pitch {} µm, factors {}{}; wrote {}",
         shot.width,
         shot.height,
         cam.pixel_pitch_um,
-        csv.display(),
-        json.display(),
         shot.factors_applied.join(" × "),
         mtf_nyq
-            .map(|m| format!("; MTF at Nyquist {m:.3}"))
-            .unwrap_or_default()
+            .map(|m| format!(", MTF at Nyquist {m:.3}"))
+            .unwrap_or_default(),
+        written
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     Ok(())
 }
