@@ -6,6 +6,8 @@
 //! crossings (or from the target description); [`fit_law`] refines it from
 //! phase samples measured by local sine fits.
 
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 use super::profile::Profile;
 use serde::{Deserialize, Serialize};
 
@@ -103,12 +105,11 @@ pub fn fit_law(pts: &[(f64, f64, f64)], kind: LawKind) -> Option<(PhaseLaw, f64)
             } else {
                 1.0 / span
             };
-            let cost = |k: f64| {
-                lsq2(pts, k)
-                    .map(|(_, r)| r)
-                    .unwrap_or(f64::INFINITY)
-            };
-            let (mut a, mut b) = (-0.5 / span, (3.0 * k_guess.abs()).max(1.0 / span) + 10.0 / span);
+            let cost = |k: f64| lsq2(pts, k).map(|(_, r)| r).unwrap_or(f64::INFINITY);
+            let (mut a, mut b) = (
+                -0.5 / span,
+                (3.0 * k_guess.abs()).max(1.0 / span) + 10.0 / span,
+            );
             let g = 0.5 * (5f64.sqrt() - 1.0);
             let mut x1 = b - g * (b - a);
             let mut x2 = a + g * (b - a);
@@ -312,6 +313,9 @@ fn crossings(d: &[f64], h: &[f64]) -> Vec<(f64, bool)> {
     out
 }
 
+/// (s, phase in cycles, weight) samples of a phase law.
+pub type PhasePoints = Vec<(f64, f64, f64)>;
+
 /// A first guess of the phase law from the profile's zero crossings, using the
 /// well-resolved low-frequency part (stops where the half-periods become
 /// irregular, the oscillation fades, or `max_cy_px` is reached).
@@ -321,7 +325,7 @@ pub fn initial_law(
     kind: Option<LawKind>,
     s_per_px: impl Fn(f64) -> f64,
     max_cy_px: f64,
-) -> Option<(PhaseLaw, Vec<(f64, f64, f64)>)> {
+) -> Option<(PhaseLaw, PhasePoints)> {
     let (s0, ds, v) = uniform(prof);
     let n = v.len();
     if n < 16 {

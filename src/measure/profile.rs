@@ -6,6 +6,8 @@
 //! can work at the true sample positions and correct the tiny box blur of
 //! binning exactly.
 
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::geometry::{Homography, Point};
 use crate::photo::Plane;
 
@@ -290,7 +292,11 @@ mod tests {
         }
         // Samples inside: 70% of the strip area (margins 15% + 15%) minus the end pixels.
         let area = len * wid * 0.7;
-        assert!((p.samples as f64 - area).abs() < 0.03 * area, "{}", p.samples);
+        assert!(
+            (p.samples as f64 - area).abs() < 0.03 * area,
+            "{}",
+            p.samples
+        );
         let sc = strip.scale_at(100.0);
         assert!((sc.s_per_px - 1.0).abs() < 1e-9);
         assert!((sc.angle_rad - a).abs() < 1e-9);
@@ -306,7 +312,11 @@ mod tests {
             offset: (1, 0),
             data: (0..1000).map(|k| (2 * (k % 50) + 1) as f32 + 0.5).collect(),
         };
-        let strip = strip_for(crate::geometry::rect_corners(0.0, 0.0, 100.0, 40.0), 100.0, 40.0);
+        let strip = strip_for(
+            crate::geometry::rect_corners(0.0, 0.0, 100.0, 40.0),
+            100.0,
+            40.0,
+        );
         let p = bin_plane(&plane, &strip, &BinOptions::default());
         for k in 0..p.s.len() {
             assert!((p.y[k] - p.s[k]).abs() < 1e-9);

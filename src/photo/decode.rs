@@ -107,9 +107,8 @@ pub fn decode_bytes(bytes: &[u8], name: &str) -> Result<Decoded, DecodeError> {
     if bytes.is_empty() {
         return Err(corrupt("the file is empty".into()));
     }
-    let format = image::guess_format(bytes).map_err(|_| {
-        unsupported("not a JPEG, PNG or TIFF file (unrecognised signature)".into())
-    })?;
+    let format = image::guess_format(bytes)
+        .map_err(|_| unsupported("not a JPEG, PNG or TIFF file (unrecognised signature)".into()))?;
     let format_name = match format {
         ImageFormat::Jpeg => "jpeg",
         ImageFormat::Png => "png",
@@ -194,7 +193,10 @@ mod tests {
             "c.tif",
         )
         .unwrap();
-        assert_eq!((d.width, d.channels, d.bits(), d.format), (4, 3, 16, "tiff"));
+        assert_eq!(
+            (d.width, d.channels, d.bits(), d.format),
+            (4, 3, 16, "tiff")
+        );
         assert_eq!(d.value(2, 1, 0), 2000.0 / 65535.0);
         assert_eq!(d.value(2, 1, 1), 7.0 / 65535.0);
     }

@@ -301,8 +301,8 @@ mod tests {
 
     #[test]
     fn tone_curve_is_monotone_and_interpolates() {
-        let c = ToneCurve::from_patches(&[(0.8, 0.7), (0.2, 0.1), (0.5, 0.3), (0.55, 0.25)])
-            .unwrap();
+        let c =
+            ToneCurve::from_patches(&[(0.8, 0.7), (0.2, 0.1), (0.5, 0.3), (0.55, 0.25)]).unwrap();
         assert!(c.linear.windows(2).all(|w| w[1] >= w[0]));
         assert!((c.apply(0.2) - 0.1).abs() < 1e-12);
         assert!((c.apply(0.8) - 0.7).abs() < 1e-12);

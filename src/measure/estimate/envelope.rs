@@ -3,6 +3,8 @@
 //! frequencies removed); its magnitude, averaged over a window of cycles and
 //! divided by the local mean, is the modulation.
 
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 use super::{Estimator, ModPoint, bin_attenuation};
 use crate::measure::law::{PhaseLaw, moving_mean_frac, uniform};
 use crate::measure::profile::Profile;
@@ -34,7 +36,9 @@ pub fn analytic_magnitude(v: &[f64]) -> Vec<f64> {
         full[k] = spec[k] * 2.0;
     }
     full[m / 2] = spec[m / 2];
-    FftPlanner::<f64>::new().plan_fft_inverse(m).process(&mut full);
+    FftPlanner::<f64>::new()
+        .plan_fft_inverse(m)
+        .process(&mut full);
     full[..n].iter().map(|z| z.norm() / m as f64).collect()
 }
 
@@ -115,7 +119,13 @@ mod tests {
         let pts = Envelope { window_cycles: 4.0 }.estimate(&prof, &law, &grid);
         assert!(pts.len() > 30);
         for p in &pts {
-            assert!((p.modulation - truth(p.s)).abs() < 0.01, "{} {} {}", p.s, p.modulation, truth(p.s));
+            assert!(
+                (p.modulation - truth(p.s)).abs() < 0.01,
+                "{} {} {}",
+                p.s,
+                p.modulation,
+                truth(p.s)
+            );
         }
     }
 }

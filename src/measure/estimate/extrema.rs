@@ -3,6 +3,8 @@
 //! the bins around each extremum, and M = (Amax − Amin)/(Amax + Amin) for each
 //! adjacent max/min pair.
 
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 use super::{Estimator, ModPoint, bin_attenuation};
 use crate::measure::law::PhaseLaw;
 use crate::measure::profile::Profile;
@@ -154,7 +156,13 @@ mod tests {
         let pts = Extrema.estimate(&prof, &law, &[]);
         assert!(pts.len() > 500);
         for p in &pts {
-            assert!((p.modulation - truth(p.s)).abs() < 0.01, "{} {} {}", p.s, p.modulation, truth(p.s));
+            assert!(
+                (p.modulation - truth(p.s)).abs() < 0.01,
+                "{} {} {}",
+                p.s,
+                p.modulation,
+                truth(p.s)
+            );
         }
     }
 }

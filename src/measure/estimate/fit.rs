@@ -7,6 +7,8 @@
 //! offset. The amplitude is de-biased for noise (E[a² + b²] = A² + var a +
 //! var b), so that the estimate is unbiased at low signal-to-noise ratio.
 
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 use super::{Estimator, ModPoint, bin_attenuation};
 use crate::measure::law::PhaseLaw;
 use crate::measure::profile::Profile;
@@ -74,7 +76,12 @@ pub fn local_fit(
         let att = bin_attenuation(law.freq(prof.s[k]), prof.var_s[k]);
         let arg = 2.0 * PI * ph;
         (
-            [1.0, (prof.s[k] - s0) / scale, att * arg.cos(), att * arg.sin()],
+            [
+                1.0,
+                (prof.s[k] - s0) / scale,
+                att * arg.cos(),
+                att * arg.sin(),
+            ],
             taper * prof.count[k],
         )
     };
@@ -215,16 +222,35 @@ mod tests {
         let pts = SineFit { window_cycles: 4.0 }.estimate(&prof, &law, &grid);
         assert!(pts.len() > 30);
         for p in &pts {
-            assert!((p.modulation - truth(p.s)).abs() < 2e-3, "{} {} {}", p.s, p.modulation, truth(p.s));
+            assert!(
+                (p.modulation - truth(p.s)).abs() < 2e-3,
+                "{} {} {}",
+                p.s,
+                p.modulation,
+                truth(p.s)
+            );
         }
         // Noise: mean error over many points stays small relative to the scatter.
         let (prof, law, truth) = chirp(0.05, 7);
         let pts = SineFit { window_cycles: 4.0 }.estimate(&prof, &law, &grid);
-        let bias: f64 = pts.iter().map(|p| p.modulation - truth(p.s)).sum::<f64>() / pts.len() as f64;
-        let spread: f64 = (pts.iter().map(|p| (p.modulation - truth(p.s)).powi(2)).sum::<f64>() / pts.len() as f64).sqrt();
-        let claimed: f64 = (pts.iter().map(|p| p.err * p.err).sum::<f64>() / pts.len() as f64).sqrt();
-        assert!(bias.abs() < 0.5 * spread + 1e-3, "bias {bias} spread {spread}");
-        assert!(claimed > 0.5 * spread && claimed < 2.0 * spread, "claimed {claimed} spread {spread}");
+        let bias: f64 =
+            pts.iter().map(|p| p.modulation - truth(p.s)).sum::<f64>() / pts.len() as f64;
+        let spread: f64 = (pts
+            .iter()
+            .map(|p| (p.modulation - truth(p.s)).powi(2))
+            .sum::<f64>()
+            / pts.len() as f64)
+            .sqrt();
+        let claimed: f64 =
+            (pts.iter().map(|p| p.err * p.err).sum::<f64>() / pts.len() as f64).sqrt();
+        assert!(
+            bias.abs() < 0.5 * spread + 1e-3,
+            "bias {bias} spread {spread}"
+        );
+        assert!(
+            claimed > 0.5 * spread && claimed < 2.0 * spread,
+            "claimed {claimed} spread {spread}"
+        );
         let _ = lcg_normal;
     }
 }

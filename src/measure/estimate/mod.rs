@@ -106,10 +106,7 @@ pub(crate) mod tests_support {
     /// A linear chirp 0.01→0.3 cycles/unit over 4000 units, bins of 0.25, mean
     /// 0.5 with a 20 % gradient, modulation 0.6·(1 − 0.8·s/L), additive noise of
     /// `noise` per bin. Returns the profile, the true law and the true modulation.
-    pub fn chirp(
-        noise: f64,
-        seed: u64,
-    ) -> (Profile, PhaseLaw, impl Fn(f64) -> f64) {
+    pub fn chirp(noise: f64, seed: u64) -> (Profile, PhaseLaw, impl Fn(f64) -> f64) {
         let l = 4000.0;
         let law = PhaseLaw {
             kind: LawKind::Linear,
