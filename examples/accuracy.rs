@@ -1,7 +1,8 @@
 //! Error against run time: every method and the main settings (bin width,
 //! window length, margin) over a fixed set of simulated shots with known truth.
 //!
-//! Run: `cargo run --release --example accuracy [-- --quick]`
+//! Run: `cargo run --release --example accuracy [-- --quick]`; `-- --write DIR`
+//! instead writes every case as a photo and prints its `--roi`.
 //! Prints one table row per (case, method, setting): RMS |MTF − truth| over
 //! 0.01–0.45 cy/px, the largest local-frequency error (%), and the time of one
 //! measurement (decode + measure) in milliseconds.
@@ -52,8 +53,31 @@ fn score(shot: &SynthShot, bytes: &[u8], opts: &MeasureOptions) -> Result<Score,
 }
 
 fn main() {
-    let quick = std::env::args().any(|a| a == "--quick");
+    let args: Vec<String> = std::env::args().collect();
+    let quick = args.iter().any(|a| a == "--quick");
     let cases = standard_cases();
+    if let Some(i) = args.iter().position(|a| a == "--write") {
+        // Write every case as a file plus its region, for trying the CLI.
+        let dir = std::path::PathBuf::from(args.get(i + 1).map(String::as_str).unwrap_or("."));
+        std::fs::create_dir_all(&dir).expect("output folder");
+        for shot in &cases {
+            let ext = if shot.jpeg_quality.is_some() {
+                "jpg"
+            } else {
+                "png"
+            };
+            let path = dir.join(format!("{}.{ext}", shot.name));
+            std::fs::write(&path, shot.encode(42)).expect("write");
+            let roi: Vec<String> = shot
+                .quad
+                .iter()
+                .flatten()
+                .map(|v| format!("{v:.2}"))
+                .collect();
+            println!("{} --roi {}", path.display(), roi.join(","));
+        }
+        return;
+    }
     let mut settings: Vec<(String, MeasureOptions)> = Vec::new();
     for method in Method::ALL {
         settings.push((

@@ -1,1 +1,7 @@
 //! Writing results: CSV, JSON summaries and plots, atomically.
+
+pub mod atomic;
+pub mod csv;
+pub mod json;
+pub mod mtf_plot;
+pub mod roi_plot;
