@@ -26,26 +26,26 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub target: Option<PathBuf>,
     /// Modulation estimator: extrema | fit | envelope.
-    #[arg(long, default_value = "fit", value_name = "METHOD")]
-    pub method: String,
+    #[arg(long, default_value = "fit", value_name = "METHOD", value_parser = parse_method)]
+    pub method: Method,
     /// Sweep law without a target: auto | linear | log.
-    #[arg(long, default_value = "auto", value_name = "LAW")]
-    pub sweep: String,
+    #[arg(long, default_value = "auto", value_name = "LAW", value_parser = parse_sweep)]
+    pub sweep: SweepChoice,
     /// Power-law tone instead of the default (1 = data already linear).
     #[arg(long, value_name = "G")]
     pub gamma: Option<f64>,
     /// Tone curve: `chart` measures it from the target's grey/density patches.
-    #[arg(long, value_name = "chart")]
-    pub tone: Option<String>,
+    #[arg(long, value_name = "chart", value_parser = parse_tone)]
+    pub tone: Option<bool>,
     /// Channel: luma | r | g | b | all.
-    #[arg(long, default_value = "luma", value_name = "CH")]
-    pub channel: String,
+    #[arg(long, default_value = "luma", value_name = "CH", value_parser = parse_channel)]
+    pub channel: Channel,
     /// Pixel pitch with a unit (e.g. 4.3um), for cycles/mm on the sensor.
     #[arg(long, value_name = "LENGTH")]
     pub pixel_pitch: Option<String>,
     /// Plot format: png | svg.
-    #[arg(long, default_value = "png", value_name = "FMT")]
-    pub plot: String,
+    #[arg(long, default_value = "png", value_name = "FMT", value_parser = parse_plot)]
+    pub plot: PlotFormat,
     /// Print the JSON summary on stdout instead of the summary line.
     #[arg(long)]
     pub json: bool,
@@ -76,31 +76,42 @@ pub fn parse_roi(text: &str) -> Result<[[f64; 2]; 4], String> {
     }
 }
 
+fn parse_method(s: &str) -> Result<Method, String> {
+    Method::parse(s).ok_or_else(|| format!("'{s}': use extrema, fit or envelope"))
+}
+
+fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
+    match s {
+        "auto" => Ok(SweepChoice::Auto),
+        "linear" => Ok(SweepChoice::Linear),
+        "log" => Ok(SweepChoice::Log),
+        other => Err(format!("'{other}': use auto, linear or log")),
+    }
+}
+
+fn parse_channel(s: &str) -> Result<Channel, String> {
+    Channel::parse(s).ok_or_else(|| format!("'{s}': use luma, r, g, b or all"))
+}
+
+fn parse_tone(s: &str) -> Result<bool, String> {
+    match s {
+        "chart" => Ok(true),
+        other => Err(format!("'{other}': the only tone is 'chart'")),
+    }
+}
+
+fn parse_plot(s: &str) -> Result<PlotFormat, String> {
+    match s {
+        "png" => Ok(PlotFormat::Png),
+        "svg" => Ok(PlotFormat::Svg),
+        other => Err(format!("'{other}': use png or svg")),
+    }
+}
+
 fn options(a: &Args) -> Result<MeasureOptions, CliError> {
     let usage = CliError::usage;
-    let method = Method::parse(&a.method).ok_or_else(|| {
-        usage(format!(
-            "--method '{}': use extrema, fit or envelope",
-            a.method
-        ))
-    })?;
-    let sweep = match a.sweep.as_str() {
-        "auto" => SweepChoice::Auto,
-        "linear" => SweepChoice::Linear,
-        "log" => SweepChoice::Log,
-        other => return Err(usage(format!("--sweep '{other}': use auto, linear or log"))),
-    };
-    let channel = Channel::parse(&a.channel).ok_or_else(|| {
-        usage(format!(
-            "--channel '{}': use luma, r, g, b or all",
-            a.channel
-        ))
-    })?;
-    let tone_chart = match a.tone.as_deref() {
-        None => false,
-        Some("chart") => true,
-        Some(other) => return Err(usage(format!("--tone '{other}': the only tone is 'chart'"))),
-    };
+    let (method, sweep, channel) = (a.method, a.sweep, a.channel);
+    let tone_chart = a.tone.unwrap_or(false);
     if tone_chart && a.gamma.is_some() {
         return Err(usage("--tone chart and --gamma exclude each other".into()));
     }
@@ -193,11 +204,7 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
 pub fn run(a: &Args) -> Result<(), CliError> {
     let t_start = Instant::now();
     let opts = options(a)?;
-    let plot_format = match a.plot.as_str() {
-        "png" => PlotFormat::Png,
-        "svg" => PlotFormat::Svg,
-        other => return Err(CliError::usage(format!("--plot '{other}': use png or svg"))),
-    };
+    let plot_format = a.plot;
     let name = a.photo.display().to_string();
     let target = sweepmtf::measure::load_target(&opts)
         .map_err(|f| CliError::new(code_of(&f), f.to_string()))?;
