@@ -4,7 +4,10 @@
 //! resampling (a Bayer colour's sites are a sparse plane; no demosaicing).
 
 pub mod decode;
+pub mod exif;
 pub mod linearise;
+pub mod pitch;
+pub mod raw;
 
 /// One channel of linear-light samples on a regular lattice of image pixel sites.
 ///
