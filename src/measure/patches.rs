@@ -36,6 +36,9 @@ pub struct PatchResult {
     pub mtf_err: f64,
     /// Above the sampling band: the value is not an MTF.
     pub aliased: bool,
+    /// Image corners of the binned part of the patch.
+    #[serde(skip)]
+    pub region_px: [crate::geometry::Point; 4],
 }
 
 /// Measures every sine patch of the target in one plane; patches that cannot be measured are skipped.
@@ -82,6 +85,8 @@ pub fn measure_patches(
                 mtf: fit.modulation() / p.contrast,
                 mtf_err: fit.modulation_err() / p.contrast,
                 aliased,
+                region_px: strip
+                    .image_quad(opts.margin * strip.width, (1.0 - opts.margin) * strip.width),
             })
         })
         .collect()

@@ -60,6 +60,11 @@ pub fn roi_plot(m: &Measurement) -> Result<Vec<u8>, ReportError> {
         let c1 = to(m.roi[0]);
         root.draw(&Circle::new(c1, 5, yellow.filled()))
             .map_err(err)?;
+        for p in &m.patches {
+            let col = if p.aliased { red } else { cyan };
+            root.draw(&PathElement::new(quad(&p.region_px), col.stroke_width(1)))
+                .map_err(err)?;
+        }
         for c in &m.curves {
             root.draw(&PathElement::new(quad(&c.region_px), cyan.stroke_width(1)))
                 .map_err(err)?;
