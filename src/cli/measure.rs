@@ -144,7 +144,7 @@ fn options(a: &Args) -> Result<MeasureOptions, CliError> {
 /// The exit code for a failed measurement.
 pub fn code_of(f: &Failure) -> Code {
     match f {
-        Failure::Decode(_) | Failure::Target(_) => Code::Input,
+        Failure::Decode(_) | Failure::Raw(_) | Failure::Target(_) => Code::Input,
         Failure::Options(_) => Code::Usage,
         Failure::NoRoi | Failure::Region(_) | Failure::TooSmall(_) => Code::Locate,
         Failure::Clipped { .. } | Failure::NoOscillation(_) | Failure::ModulationUnknown(_) => {
@@ -206,15 +206,8 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     let opts = options(a)?;
     let plot_format = a.plot;
     let name = a.photo.display().to_string();
-    let target = sweepmtf::measure::load_target(&opts)
-        .map_err(|f| CliError::new(code_of(&f), f.to_string()))?;
-    let t0 = Instant::now();
-    let dec = sweepmtf::photo::decode::decode_file(&a.photo)
-        .map_err(|e| CliError::new(Code::Input, e.to_string()))?;
     let t1 = Instant::now();
-    let m =
-        sweepmtf::measure::measure_decoded(&dec, &name, target.as_ref(), &opts).map_err(fail)?;
-    drop(dec);
+    let m = sweepmtf::measure::measure_file(&a.photo, &opts).map_err(fail)?;
     let t2 = Instant::now();
 
     let stem = a
@@ -249,7 +242,6 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     files.push((out("roi.png"), roi_plot::roi_plot(&m).map_err(out_err)?));
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     let timings = Timings {
-        decode_ms: ms(t0, t1),
         measure_ms: ms(t1, t2),
         total_ms: ms(t_start, Instant::now()),
     };

@@ -225,6 +225,62 @@ pub fn uniform(prof: &Profile) -> (f64, f64, Vec<f64>) {
     (0.5 * bin, bin, v)
 }
 
+/// Like [`uniform`], but on the finest grid (a whole multiple of the bin width, at most 8)
+/// on which at most 5 % of the cells are empty, so that little needs filling in.
+/// Each cell is the count-weighted mean of the bins that fall in it. Also returns the
+/// mean variance of sample positions within a cell (strip units²).
+pub fn uniform_dense(prof: &Profile) -> (f64, f64, Vec<f64>, f64) {
+    let mut best = None;
+    for k in 1..=8usize {
+        let step = prof.bin * k as f64;
+        let n = ((prof.length / step).ceil() as usize).max(1);
+        let mut sum = vec![0.0f64; n];
+        let mut cnt = vec![0.0f64; n];
+        let mut ss = vec![0.0f64; n];
+        let mut ss2 = vec![0.0f64; n];
+        for i in 0..prof.s.len() {
+            let b = ((prof.s[i] / step) as usize).min(n - 1);
+            let c = prof.count[i];
+            sum[b] += prof.y[i] * c;
+            cnt[b] += c;
+            ss[b] += prof.s[i] * c;
+            ss2[b] += (prof.s[i] * prof.s[i] + prof.var_s[i]) * c;
+        }
+        let (mut vsum, mut vn) = (0.0f64, 0.0f64);
+        for b in 0..n {
+            if cnt[b] > 0.0 {
+                let m = ss[b] / cnt[b];
+                vsum += (ss2[b] / cnt[b] - m * m).max(0.0);
+                vn += 1.0;
+            }
+        }
+        let avg_var = vsum / vn.max(1.0);
+        // Only the span between the first and last filled cells matters.
+        let first = cnt.iter().position(|&c| c > 0.0).unwrap_or(0);
+        let last = cnt.iter().rposition(|&c| c > 0.0).unwrap_or(0);
+        let empty = cnt[first..=last].iter().filter(|&&c| c == 0.0).count();
+        let mut v: Vec<f64> = (0..n)
+            .map(|b| {
+                if cnt[b] > 0.0 {
+                    sum[b] / cnt[b]
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect();
+        let ok = (empty as f64) <= 0.05 * (last + 1 - first) as f64;
+        if ok || k == 8 {
+            fill_gaps(&mut v);
+            best = Some((0.5 * step, step, v, avg_var));
+            break;
+        }
+    }
+    best.unwrap_or_else(|| {
+        let (a, b, v) = uniform(prof);
+        (a, b, v, 0.0)
+    })
+}
+
 fn fill_gaps(v: &mut [f64]) {
     let known: Vec<usize> = (0..v.len()).filter(|&i| v[i].is_finite()).collect();
     if known.is_empty() {

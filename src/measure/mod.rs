@@ -12,7 +12,7 @@
 
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
-use crate::photo::decode::{DecodeError, Decoded, Samples, decode_file};
+use crate::photo::decode::{DecodeError, Decoded, Samples, decode_bytes};
 use crate::photo::linearise::{Channel, Crop, Tone, ToneCurve, default_tone, plane_names, planes};
 use crate::target::{Direction, Sweep, SweepLaw, Target, TargetError};
 use serde::{Deserialize, Serialize};
@@ -32,7 +32,7 @@ pub use law::{LawKind, PhaseLaw};
 pub use patches::PatchResult;
 
 use estimate::fit::local_fit;
-use profile::{BinOptions, Profile, Strip, bin_plane};
+use profile::{BinOptions, Profile, Strip, bin_plane, bin_planes};
 
 /// Which sweep law to fit when no target description gives it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -99,6 +99,9 @@ pub enum Failure {
     /// The photo could not be decoded.
     #[error("{0}")]
     Decode(#[from] DecodeError),
+    /// A camera raw file could not be decoded (the message names the file).
+    #[error("{0}")]
+    Raw(String),
     /// The target description could not be used.
     #[error("{0}")]
     Target(#[from] TargetError),
@@ -132,7 +135,7 @@ pub enum Failure {
 
 /// A failed measurement: the file and the cause, displayed as one line.
 #[derive(Debug, Error)]
-#[error("{}", if matches!(self.failure, Failure::Decode(_)) { self.failure.to_string() } else { format!("{}: {}", self.path, self.failure) })]
+#[error("{}", if matches!(self.failure, Failure::Decode(_) | Failure::Raw(_)) { self.failure.to_string() } else { format!("{}: {}", self.path, self.failure) })]
 pub struct MeasureError {
     /// The photo.
     pub path: String,
@@ -227,11 +230,95 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
         path: name.clone(),
         failure: f,
     })?;
-    let dec = decode_file(path).map_err(|e| MeasureError {
+    if crate::photo::raw::is_raw_path(path) {
+        return measure_raw(path, &name, target.as_ref(), opts);
+    }
+    let bytes = std::fs::read(path).map_err(|source| MeasureError {
+        path: name.clone(),
+        failure: DecodeError::Io {
+            path: name.clone(),
+            source,
+        }
+        .into(),
+    })?;
+    let dec = decode_bytes(&bytes, &name).map_err(|e| MeasureError {
         path: name.clone(),
         failure: e.into(),
     })?;
-    measure_decoded(&dec, &name, target.as_ref(), opts)
+    let facts = crate::photo::exif::facts_from_bytes(&bytes);
+    drop(bytes);
+    let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
+    let o = MeasureOptions {
+        pixel_pitch_mm: pitch.pitch_mm,
+        ..opts.clone()
+    };
+    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o)?;
+    m.warnings.extend(pitch.warnings);
+    Ok(m)
+}
+
+/// Measures a camera raw file: linear CFA planes, no demosaicing, no tone curve.
+pub fn measure_raw(
+    path: &Path,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+) -> Result<Measurement, MeasureError> {
+    use crate::photo::raw::{RawChannel, decode_raw};
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    check_options(opts).map_err(err)?;
+    let frame = decode_raw(path).map_err(|e| err(Failure::Raw(e.to_string())))?;
+    let roi = resolve_roi(opts, frame.width, frame.height).map_err(err)?;
+    let mut warnings = Vec::new();
+    let rc = match opts.channel {
+        Channel::Luma => {
+            warnings.push(
+                "raw file: measuring the green sites (luminance would need demosaicing); \
+                 use --channel r, g, b or all to choose"
+                    .to_string(),
+            );
+            RawChannel::G
+        }
+        Channel::R => RawChannel::R,
+        Channel::G => RawChannel::G,
+        Channel::B => RawChannel::B,
+        Channel::All => RawChannel::All,
+    };
+    if opts.gamma.is_some() || opts.tone_chart {
+        warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
+    }
+    let groups = frame.channel_groups(rc);
+    let pitch =
+        crate::photo::pitch::resolve(&frame.facts, frame.width, frame.height, opts.pixel_pitch_mm);
+    let o = MeasureOptions {
+        pixel_pitch_mm: pitch.pitch_mm,
+        ..opts.clone()
+    };
+    let mut m = measure_planes(
+        &groups,
+        (frame.width, frame.height),
+        &roi,
+        target,
+        &o,
+        0.9999,
+    )
+    .map_err(err)?;
+    // Preview: the first sample of each pixel, through the sRGB curve for display.
+    m.preview = preview_from(&roi, frame.width, frame.height, |x, y| {
+        let v = frame.value(x, y, 0).clamp(0.0, 1.0) as f64;
+        let c = (255.0 * crate::photo::linearise::linear_to_srgb(v)).round() as u8;
+        [c, c, c]
+    });
+    m.source = name.to_string();
+    m.bits = frame.bits_per_sample as u32;
+    m.tone = "linear raw (black level removed, white level = 1)".to_string();
+    warnings.extend(pitch.warnings);
+    warnings.append(&mut m.warnings);
+    m.warnings = warnings;
+    Ok(m)
 }
 
 /// Reads the target description named in the options, if any.
@@ -286,9 +373,12 @@ pub fn measure_decoded(
     let ps = planes(dec, crop, &tone, opts.channel);
     let names = plane_names(opts.channel, dec.channels);
     let preview = make_preview(dec, &roi);
+    let groups: Vec<(&str, Vec<Plane>)> = names
+        .into_iter()
+        .zip(ps.into_iter().map(|p| vec![p]))
+        .collect();
     let mut m = measure_planes(
-        &ps,
-        &names,
+        &groups,
         (dec.width, dec.height),
         &roi,
         target,
@@ -502,10 +592,11 @@ fn chart_tone(raw: &Plane, t: &Target, roi: &[Point; 4]) -> Result<ToneCurve, Fa
     ToneCurve::from_patches(&pairs).map_err(Failure::Options)
 }
 
-/// Measures linear planes (one per channel, named by `names`) of an image of `size` (w, h) pixels.
+/// Measures linear planes of an image of `size` (w, h) pixels: one group per
+/// channel, (name, planes binned together — e.g. both green sites of a Bayer
+/// mosaic). A sample at or above `clip_level` counts as clipped.
 pub fn measure_planes(
-    planes: &[Plane],
-    names: &[&str],
+    groups: &[(&str, Vec<Plane>)],
     size: (usize, usize),
     roi: &[Point; 4],
     target: Option<&Target>,
@@ -522,9 +613,22 @@ pub fn measure_planes(
         end_px: 1.0,
         clip_level,
     };
-    for (plane, name) in planes.iter().zip(names) {
+    for (name, group) in groups {
+        let plane_refs: Vec<&Plane> = group.iter().collect();
+        if plane_refs.is_empty() {
+            continue;
+        }
         for (id, strip, tlaw, contrast) in &specs {
-            let c = measure_strip(plane, name, id, strip, *tlaw, *contrast, opts, &bin_opts)?;
+            let c = measure_strip(
+                &plane_refs,
+                name,
+                id,
+                strip,
+                *tlaw,
+                *contrast,
+                opts,
+                &bin_opts,
+            )?;
             if c.clipped_fraction > 0.0 {
                 warnings.push(format!(
                     "{name}/{id}: {:.2} % of the region's samples are clipped",
@@ -543,7 +647,13 @@ pub fn measure_planes(
             && !t.patches.is_empty()
         {
             let h = target_homography(t, roi)?;
-            patch_rows.extend(patches::measure_patches(plane, name, &h, t, &bin_opts));
+            patch_rows.extend(patches::measure_patches(
+                &plane_refs,
+                name,
+                &h,
+                t,
+                &bin_opts,
+            ));
         }
     }
     if curves.is_empty() && patch_rows.is_empty() {
@@ -570,7 +680,7 @@ pub fn measure_planes(
 /// Measures one strip of one plane.
 #[allow(clippy::too_many_arguments)]
 fn measure_strip(
-    plane: &Plane,
+    planes: &[&Plane],
     channel: &str,
     id: &str,
     strip: &Strip,
@@ -587,7 +697,7 @@ fn measure_strip(
             "the strip is {len_px:.0}×{wid_px:.1} px inside its margins; it cannot hold 5 cycles"
         )));
     }
-    let prof = bin_plane(plane, strip, bin_opts);
+    let prof = bin_planes(planes, strip, bin_opts);
     if prof.s.len() < 20 {
         return Err(Failure::TooSmall(format!(
             "only {} bins fall inside the region",
@@ -601,7 +711,7 @@ fn measure_strip(
         });
     }
     let s_per_px = |s: f64| strip.scale_at(s).s_per_px;
-    let step = plane.step;
+    let step = planes[0].step;
     // Highest frequency (cy/px) at s that stays inside the lattice's band in the sweep's direction.
     let band_limit = |s: f64| {
         let a = strip.scale_at(s).angle_rad;
@@ -876,27 +986,40 @@ fn dev_at(dev: &[(f64, f64)], s: f64) -> Option<f64> {
 }
 
 fn make_preview(dec: &Decoded, roi: &[Point; 4]) -> Preview {
+    preview_from(roi, dec.width, dec.height, |x, y| {
+        let mut px = [0u8; 3];
+        for (c, out) in px.iter_mut().enumerate() {
+            let cc = if dec.channels == 1 { 0 } else { c };
+            let k = (y * dec.width + x) * dec.channels + cc;
+            *out = match &dec.samples {
+                Samples::U8(v) => v[k],
+                Samples::U16(v) => (v[k] >> 8) as u8,
+            };
+        }
+        px
+    })
+}
+
+/// A preview of the region (plus a margin), at most ~1200 px on its long side.
+fn preview_from(
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+    pixel: impl Fn(usize, usize) -> [u8; 3],
+) -> Preview {
     let xmin = roi.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
     let xmax = roi.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max);
     let ymin = roi.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
     let ymax = roi.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max);
     let pad = 0.08 * (xmax - xmin).max(ymax - ymin) + 8.0;
-    let crop = bbox_crop(roi, dec.width, dec.height, pad);
+    let crop = bbox_crop(roi, width, height, pad);
     let (cw, ch) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
     let step = ((cw.max(ch) as f64 / 1200.0).ceil() as usize).max(1);
     let (pw, ph) = (cw.div_ceil(step), ch.div_ceil(step));
     let mut rgb = Vec::with_capacity(pw * ph * 3);
     for j in 0..ph {
         for i in 0..pw {
-            let (x, y) = (crop.x0 + i * step, crop.y0 + j * step);
-            for c in 0..3 {
-                let cc = if dec.channels == 1 { 0 } else { c };
-                let k = (y * dec.width + x) * dec.channels + cc;
-                rgb.push(match &dec.samples {
-                    Samples::U8(v) => v[k],
-                    Samples::U16(v) => (v[k] >> 8) as u8,
-                });
-            }
+            rgb.extend(pixel(crop.x0 + i * step, crop.y0 + j * step));
         }
     }
     Preview {

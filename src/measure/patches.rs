@@ -8,7 +8,7 @@
 use super::curve::outside_band;
 use super::estimate::fit::local_fit;
 use super::law::{LawKind, PhaseLaw};
-use super::profile::{BinOptions, bin_plane};
+use super::profile::{BinOptions, bin_planes};
 use super::rect_strip;
 use crate::geometry::Homography;
 use crate::photo::Plane;
@@ -43,7 +43,7 @@ pub struct PatchResult {
 
 /// Measures every sine patch of the target in one plane; patches that cannot be measured are skipped.
 pub fn measure_patches(
-    plane: &Plane,
+    planes: &[&Plane],
     channel: &str,
     h: &Homography,
     t: &Target,
@@ -56,7 +56,7 @@ pub fn measure_patches(
             let sc = strip.scale_at(0.5 * strip.length);
             // Leave 6 % of the length at each end: the neighbours' blur.
             let end_px = (0.06 * strip.length / sc.s_per_px).max(2.0);
-            let prof = bin_plane(plane, &strip, &BinOptions { end_px, ..*opts });
+            let prof = bin_planes(planes, &strip, &BinOptions { end_px, ..*opts });
             if prof.s.len() < 8 {
                 return None;
             }
@@ -70,7 +70,7 @@ pub fn measure_patches(
             let (a, b) = (prof.s[0], prof.s[prof.s.len() - 1]);
             let half = 0.5 * (b - a) * p.freq_cy_mm;
             let f_px = p.freq_cy_mm * sc.s_per_px;
-            let aliased = outside_band(f_px, sc.angle_rad, plane.step);
+            let aliased = outside_band(f_px, sc.angle_rad, planes[0].step);
             let fit = local_fit(&prof, &phases, &law, 0.5 * (a + b), half + 1e-9)?;
             if !(fit.mean > 0.0) {
                 return None;

@@ -113,6 +113,12 @@ impl Profile {
 
 /// Bins one plane along a strip. Returns an empty profile when no sample falls inside.
 pub fn bin_plane(plane: &Plane, strip: &Strip, opts: &BinOptions) -> Profile {
+    bin_planes(&[plane], strip, opts)
+}
+
+/// Bins several planes of one colour (e.g. the two green sites of a Bayer
+/// mosaic) together along a strip.
+pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profile {
     let Some(inv) = strip.to_image.inverse() else {
         return Profile::default();
     };
@@ -132,12 +138,6 @@ pub fn bin_plane(plane: &Plane, strip: &Strip, opts: &BinOptions) -> Profile {
     let quad = strip.image_quad(t0, t1);
     let ymin = quad.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
     let ymax = quad.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max);
-    let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-    let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
-    // Sample rows whose centres lie within the quad's vertical extent.
-    let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
-    let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
-
     let mut sum = vec![0.0f64; nbins];
     let mut sum2 = vec![0.0f64; nbins];
     let mut n = vec![0u32; nbins];
@@ -150,36 +150,43 @@ pub fn bin_plane(plane: &Plane, strip: &Strip, opts: &BinOptions) -> Profile {
         ..Profile::default()
     };
     let m = inv.m;
-    for j in j0..j1 {
-        let y = oy + j as f64 * sy;
-        let Some((xa, xb)) = row_span(&quad, y) else {
-            continue;
-        };
-        let i0 = ((xa - ox) / sx).ceil().max(0.0) as usize;
-        let i1 = (((xb - ox) / sx).floor() + 1.0).clamp(0.0, plane.width as f64) as usize;
-        let row = &plane.data[j * plane.width..(j + 1) * plane.width];
-        for (i, &v) in row.iter().enumerate().take(i1).skip(i0) {
-            let x = ox + i as f64 * sx;
-            let w = m[6] * x + m[7] * y + m[8];
-            let s = (m[0] * x + m[1] * y + m[2]) / w;
-            let t = (m[3] * x + m[4] * y + m[5]) / w;
-            if !(t >= t0 && t <= t1 && s >= s_lo && s <= s_hi) {
+    for plane in planes {
+        let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+        let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+        // Sample rows whose centres lie within the quad's vertical extent.
+        let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
+        let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
+        for j in j0..j1 {
+            let y = oy + j as f64 * sy;
+            let Some((xa, xb)) = row_span(&quad, y) else {
                 continue;
+            };
+            let i0 = ((xa - ox) / sx).ceil().max(0.0) as usize;
+            let i1 = (((xb - ox) / sx).floor() + 1.0).clamp(0.0, plane.width as f64) as usize;
+            let row = &plane.data[j * plane.width..(j + 1) * plane.width];
+            for (i, &v) in row.iter().enumerate().take(i1).skip(i0) {
+                let x = ox + i as f64 * sx;
+                let w = m[6] * x + m[7] * y + m[8];
+                let s = (m[0] * x + m[1] * y + m[2]) / w;
+                let t = (m[3] * x + m[4] * y + m[5]) / w;
+                if !(t >= t0 && t <= t1 && s >= s_lo && s <= s_hi) {
+                    continue;
+                }
+                let b = ((s / bin) as usize).min(nbins - 1);
+                prof.samples += 1;
+                if v >= opts.clip_level {
+                    prof.clipped_high += 1;
+                } else if v <= 0.0 {
+                    prof.clipped_low += 1;
+                }
+                let vd = v as f64;
+                sum[b] += vd;
+                sum2[b] += vd * vd;
+                n[b] += 1;
+                ssum[b] += s;
+                ssum2[b] += s * s;
+                members.push((b as u32, v));
             }
-            let b = ((s / bin) as usize).min(nbins - 1);
-            prof.samples += 1;
-            if v >= opts.clip_level {
-                prof.clipped_high += 1;
-            } else if v <= 0.0 {
-                prof.clipped_low += 1;
-            }
-            let vd = v as f64;
-            sum[b] += vd;
-            sum2[b] += vd * vd;
-            n[b] += 1;
-            ssum[b] += s;
-            ssum2[b] += s * s;
-            members.push((b as u32, v));
         }
     }
     // Robust mean: drop samples more than 3σ (and more than a small floor) from the bin mean.

@@ -1,4 +1,5 @@
-//! Analytic-signal envelope: the profile on its uniform bin grid, minus its
+//! Analytic-signal envelope: the profile on a uniform grid (the finest whole
+//! multiple of the bin width that leaves almost no cell empty), minus its
 //! one-period moving mean, is turned into the analytic signal by FFT (negative
 //! frequencies removed); its magnitude, averaged over a window of cycles and
 //! divided by the local mean, is the modulation.
@@ -6,7 +7,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 use super::{Estimator, ModPoint, bin_attenuation};
-use crate::measure::law::{PhaseLaw, moving_mean_frac, uniform};
+use crate::measure::law::{PhaseLaw, moving_mean_frac, uniform_dense};
 use crate::measure::profile::Profile;
 use num_complex::Complex64;
 use realfft::RealFftPlanner;
@@ -48,7 +49,7 @@ impl Estimator for Envelope {
     }
 
     fn estimate(&self, prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<ModPoint> {
-        let (s0, ds, v) = uniform(prof);
+        let (s0, ds, v, avg_var) = uniform_dense(prof);
         let n = v.len();
         if n < 16 {
             return Vec::new();
@@ -61,7 +62,6 @@ impl Estimator for Envelope {
         let mean = moving_mean_frac(&v, |i| half[i]);
         let d: Vec<f64> = v.iter().zip(&mean).map(|(a, b)| a - b).collect();
         let env = analytic_magnitude(&d);
-        let avg_var: f64 = prof.var_s.iter().sum::<f64>() / prof.var_s.len().max(1) as f64;
         let (p_lo, p_hi) = (law.phase(pos(0)), law.phase(pos(n - 1)));
         grid.iter()
             .filter_map(|&s| {
