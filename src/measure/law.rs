@@ -114,7 +114,7 @@ pub fn fit_law(pts: &[(f64, f64, f64)], kind: LawKind) -> Option<(PhaseLaw, f64)
             let mut x1 = b - g * (b - a);
             let mut x2 = a + g * (b - a);
             let (mut f1c, mut f2c) = (cost(x1), cost(x2));
-            for _ in 0..100 {
+            for _ in 0..64 {
                 if f1c < f2c {
                     b = x2;
                     x2 = x1;

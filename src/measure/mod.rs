@@ -13,7 +13,9 @@
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, Samples, decode_bytes};
-use crate::photo::linearise::{Channel, Crop, Tone, ToneCurve, default_tone, plane_names, planes};
+use crate::photo::linearise::{
+    Channel, Crop, Tone, ToneCurve, default_tone, plane_names, planes, planes_within,
+};
 use crate::target::{Direction, Sweep, SweepLaw, Target, TargetError};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -31,7 +33,7 @@ pub use estimate::Method;
 pub use law::{LawKind, PhaseLaw};
 pub use patches::PatchResult;
 
-use estimate::fit::local_fit;
+use estimate::fit::{PhaseTable, local_fit};
 use profile::{BinOptions, Profile, Strip, bin_plane, bin_planes};
 
 /// Which sweep law to fit when no target description gives it.
@@ -370,7 +372,24 @@ pub fn measure_decoded(
         (t, d)
     };
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
-    let ps = planes(dec, crop, &tone, opts.channel);
+    // Convert only the region's rows spans (+2 px): the rest is never read.
+    let span = |y: usize| -> (usize, usize) {
+        let yc = y as f64 + 0.5;
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for dy in [-2.0, 0.0, 2.0] {
+            if let Some((a, b)) = profile::row_span(&roi, yc + dy) {
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
+        }
+        if lo > hi {
+            (0, 0)
+        } else {
+            ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
+        }
+    };
+    let ps = planes_within(dec, crop, &tone, opts.channel, &span);
     let names = plane_names(opts.channel, dec.channels);
     let preview = make_preview(dec, &roi);
     let groups: Vec<(&str, Vec<Plane>)> = names
@@ -876,11 +895,11 @@ fn refine_law(
     let mut law = start;
     let (s_lo, s_hi) = (prof.s[0], prof.s[prof.s.len() - 1]);
     let mut result = None;
-    for _ in 0..4 {
+    for _ in 0..3 {
         if !(law.freq(s_lo).is_finite() && law.freq(s_lo) > 0.0) {
             return result;
         }
-        let phases: Vec<f64> = prof.s.iter().map(|&s| law.phase(s)).collect();
+        let table = PhaseTable::new(prof, &law);
         let mut pts = Vec::new();
         let mut prev_shift: Option<f64> = None;
         let (p_lo, p_hi) = (law.phase(s_lo), law.phase(s_hi));
@@ -891,7 +910,7 @@ fn refine_law(
             if f_px > 0.85 * band_limit(s) {
                 break;
             }
-            let Some(fit) = local_fit(prof, &phases, &law, s, 2.0) else {
+            let Some(fit) = local_fit(prof, &table, &law, s, 2.0) else {
                 p += 1.0;
                 continue;
             };
@@ -956,23 +975,28 @@ fn output_grid(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Vec<f64> {
 
 /// Relative deviation of the image's local frequency from the law, (s, deviation) at grid points with a clear signal.
 fn local_freq_deviation(prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<(f64, f64)> {
-    let phases: Vec<f64> = prof.s.iter().map(|&s| law.phase(s)).collect();
+    let table = PhaseTable::new(prof, law);
     let fits: Vec<(f64, f64, f64)> = grid
         .iter()
         .filter_map(|&s| {
-            let f = local_fit(prof, &phases, law, s, 2.0)?;
+            let f = local_fit(prof, &table, law, s, 2.0)?;
             let snr = f.amp / f.amp_var.sqrt().max(1e-12);
-            (snr > 6.0).then_some((s, law.phase(s), f.phase_shift))
+            (snr > 15.0).then_some((s, law.phase(s), f.phase_shift))
         })
         .collect();
-    fits.windows(2)
-        .filter(|w| w[1].1 - w[0].1 < 8.0)
-        .map(|w| {
-            let mut d = w[1].2 - w[0].2;
+    // Pair each fit with the next one at least 4 cycles on (phase noise ~1/(2π·SNR) per fit).
+    let mut out = Vec::new();
+    for i in 0..fits.len() {
+        let j = fits[i..].partition_point(|f| f.1 < fits[i].1 + 4.0) + i;
+        if let Some(fj) = fits.get(j)
+            && fj.1 - fits[i].1 < 12.0
+        {
+            let mut d = fj.2 - fits[i].2;
             d -= d.round();
-            (0.5 * (w[0].0 + w[1].0), d / (w[1].1 - w[0].1))
-        })
-        .collect()
+            out.push((0.5 * (fits[i].0 + fj.0), d / (fj.1 - fits[i].1)));
+        }
+    }
+    out
 }
 
 fn dev_at(dev: &[(f64, f64)], s: f64) -> Option<f64> {

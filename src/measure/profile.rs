@@ -143,60 +143,67 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
     let mut n = vec![0u32; nbins];
     let mut ssum = vec![0.0f64; nbins];
     let mut ssum2 = vec![0.0f64; nbins];
-    let mut members: Vec<(u32, f32)> = Vec::new();
     let mut prof = Profile {
         bin,
         length: strip.length,
         ..Profile::default()
     };
     let m = inv.m;
-    for plane in planes {
-        let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-        let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
-        // Sample rows whose centres lie within the quad's vertical extent.
-        let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
-        let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
-        for j in j0..j1 {
-            let y = oy + j as f64 * sy;
-            let Some((xa, xb)) = row_span(&quad, y) else {
-                continue;
-            };
-            let i0 = ((xa - ox) / sx).ceil().max(0.0) as usize;
-            let i1 = (((xb - ox) / sx).floor() + 1.0).clamp(0.0, plane.width as f64) as usize;
-            let row = &plane.data[j * plane.width..(j + 1) * plane.width];
-            for (i, &v) in row.iter().enumerate().take(i1).skip(i0) {
-                let x = ox + i as f64 * sx;
-                let w = m[6] * x + m[7] * y + m[8];
-                let s = (m[0] * x + m[1] * y + m[2]) / w;
-                let t = (m[3] * x + m[4] * y + m[5]) / w;
-                if !(t >= t0 && t <= t1 && s >= s_lo && s <= s_hi) {
+    // Visits every sample inside the region: f(bin, s, value).
+    let visit = |f: &mut dyn FnMut(usize, f64, f32)| {
+        for plane in planes {
+            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            // Sample rows whose centres lie within the quad's vertical extent.
+            let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
+            let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
+            for j in j0..j1 {
+                let y = oy + j as f64 * sy;
+                let Some((xa, xb)) = row_span(&quad, y) else {
                     continue;
+                };
+                let i0 = ((xa - ox) / sx).ceil().max(0.0) as usize;
+                let i1 = (((xb - ox) / sx).floor() + 1.0).clamp(0.0, plane.width as f64) as usize;
+                let row = &plane.data[j * plane.width..(j + 1) * plane.width];
+                // Along a row the homography's numerators and denominator are linear in x.
+                let (ns0, nt0, w0) = (m[1] * y + m[2], m[4] * y + m[5], m[7] * y + m[8]);
+                for (i, &v) in row.iter().enumerate().take(i1).skip(i0) {
+                    let x = ox + i as f64 * sx;
+                    let rw = 1.0 / (m[6] * x + w0);
+                    let s = (m[0] * x + ns0) * rw;
+                    let t = (m[3] * x + nt0) * rw;
+                    if !(t >= t0 && t <= t1 && s >= s_lo && s <= s_hi) {
+                        continue;
+                    }
+                    f(((s / bin) as usize).min(nbins - 1), s, v);
                 }
-                let b = ((s / bin) as usize).min(nbins - 1);
-                prof.samples += 1;
-                if v >= opts.clip_level {
-                    prof.clipped_high += 1;
-                } else if v <= 0.0 {
-                    prof.clipped_low += 1;
-                }
-                let vd = v as f64;
-                sum[b] += vd;
-                sum2[b] += vd * vd;
-                n[b] += 1;
-                ssum[b] += s;
-                ssum2[b] += s * s;
-                members.push((b as u32, v));
             }
         }
-    }
+    };
+    visit(&mut |b, s, v| {
+        prof.samples += 1;
+        if v >= opts.clip_level {
+            prof.clipped_high += 1;
+        } else if v <= 0.0 {
+            prof.clipped_low += 1;
+        }
+        let vd = v as f64;
+        sum[b] += vd;
+        sum2[b] += vd * vd;
+        n[b] += 1;
+        ssum[b] += s;
+        ssum2[b] += s * s;
+    });
     // Robust mean: drop samples more than 3σ (and more than a small floor) from the bin mean.
     let mut lim = vec![f64::INFINITY; nbins];
+    let mut any_limit = false;
     for b in 0..nbins {
         if n[b] >= 4 {
             let c = n[b] as f64;
             let mu = sum[b] / c;
             let var = (sum2[b] / c - mu * mu).max(0.0);
             lim[b] = 3.0 * var.sqrt() + 1e-6;
+            any_limit = true;
         }
     }
     let mean: Vec<f64> = (0..nbins)
@@ -204,14 +211,17 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
         .collect();
     let mut rsum = vec![0.0f64; nbins];
     let mut rn = vec![0u32; nbins];
-    for &(b, v) in &members {
-        let b = b as usize;
-        if (v as f64 - mean[b]).abs() <= lim[b] {
-            rsum[b] += v as f64;
-            rn[b] += 1;
-        }
+    if any_limit {
+        visit(&mut |b, _, v| {
+            if (v as f64 - mean[b]).abs() <= lim[b] {
+                rsum[b] += v as f64;
+                rn[b] += 1;
+            }
+        });
+    } else {
+        rsum.copy_from_slice(&sum);
+        rn.copy_from_slice(&n);
     }
-    drop(members);
     for b in 0..nbins {
         if n[b] == 0 {
             continue;
@@ -232,7 +242,7 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
 }
 
 /// The x-interval where the horizontal line at `y` crosses a convex quadrilateral.
-fn row_span(q: &[Point; 4], y: f64) -> Option<(f64, f64)> {
+pub fn row_span(q: &[Point; 4], y: f64) -> Option<(f64, f64)> {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for k in 0..4 {

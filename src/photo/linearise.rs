@@ -205,6 +205,19 @@ pub fn plane_names(channel: Channel, channels: usize) -> Vec<&'static str> {
 
 /// Linear planes of the crop, one per name of [`plane_names`] (a grey photo gives one plane for any channel).
 pub fn planes(dec: &Decoded, crop: Crop, tone: &Tone, channel: Channel) -> Vec<Plane> {
+    planes_within(dec, crop, tone, channel, &|_| (crop.x0, crop.x1))
+}
+
+/// Like [`planes`], but converts only the columns `span(y)` = [x0, x1) of each
+/// image row y (the rest of the crop stays 0): a rotated region's bounding box
+/// is mostly outside it, and conversion is the largest cost after decoding.
+pub fn planes_within(
+    dec: &Decoded,
+    crop: Crop,
+    tone: &Tone,
+    channel: Channel,
+    span: &dyn Fn(usize) -> (usize, usize),
+) -> Vec<Plane> {
     let (w, h) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
     let levels = match dec.samples {
         Samples::U8(_) => 256,
@@ -218,10 +231,18 @@ pub fn planes(dec: &Decoded, crop: Crop, tone: &Tone, channel: Channel) -> Vec<P
             Samples::U16(v) => v[i] as usize,
         }
     };
-    let one = |c: usize| -> Vec<f32> {
-        let mut out = Vec::with_capacity(w * h);
+    let cols = |y: usize| {
+        let (a, b) = span(y);
+        (a.clamp(crop.x0, crop.x1), b.clamp(crop.x0, crop.x1))
+    };
+    let fill = |value: &dyn Fn(usize, usize) -> f32| -> Vec<f32> {
+        let mut out = vec![0f32; w * h];
         for y in crop.y0..crop.y1 {
-            out.extend((crop.x0..crop.x1).map(|x| lut[code(x, y, c)]));
+            let (a, b) = cols(y);
+            let row = &mut out[(y - crop.y0) * w..(y - crop.y0 + 1) * w];
+            for x in a..b {
+                row[x - crop.x0] = value(x, y);
+            }
         }
         out
     };
@@ -232,25 +253,20 @@ pub fn planes(dec: &Decoded, crop: Crop, tone: &Tone, channel: Channel) -> Vec<P
         offset: (crop.x0, crop.y0),
         data,
     };
+    let one = |c: usize| wrap(fill(&|x, y| lut[code(x, y, c)]));
     if dec.channels == 1 {
-        return vec![wrap(one(0))];
+        return vec![one(0)];
     }
     match channel {
-        Channel::R => vec![wrap(one(0))],
-        Channel::G => vec![wrap(one(1))],
-        Channel::B => vec![wrap(one(2))],
-        Channel::All => (0..3).map(|c| wrap(one(c))).collect(),
-        Channel::Luma => {
-            let mut out = Vec::with_capacity(w * h);
-            for y in crop.y0..crop.y1 {
-                out.extend((crop.x0..crop.x1).map(|x| {
-                    LUMA_WEIGHTS[0] * lut[code(x, y, 0)]
-                        + LUMA_WEIGHTS[1] * lut[code(x, y, 1)]
-                        + LUMA_WEIGHTS[2] * lut[code(x, y, 2)]
-                }));
-            }
-            vec![wrap(out)]
-        }
+        Channel::R => vec![one(0)],
+        Channel::G => vec![one(1)],
+        Channel::B => vec![one(2)],
+        Channel::All => (0..3).map(one).collect(),
+        Channel::Luma => vec![wrap(fill(&|x, y| {
+            LUMA_WEIGHTS[0] * lut[code(x, y, 0)]
+                + LUMA_WEIGHTS[1] * lut[code(x, y, 1)]
+                + LUMA_WEIGHTS[2] * lut[code(x, y, 2)]
+        }))],
     }
 }
 

@@ -1,7 +1,7 @@
 //! Windowed least-squares sine fit along the phase law (the default estimator).
 //!
 //! Around each output position s0 the bins within ±window/2 cycles of phase
-//! are fitted, with Hann weights in phase times the bin counts, by
+//! are fitted, with biweight weights (1 − u²)² in phase times the bin counts, by
 //! `c0 + c1·(s − s0) + a·cos 2πφ(s) + b·sin 2πφ(s)`: the linear term removes a
 //! slow illumination gradient, the free (a, b) absorb any residual phase
 //! offset. The amplitude is de-biased for noise (E[a² + b²] = A² + var a +
@@ -49,14 +49,54 @@ impl LocalFit {
     }
 }
 
-/// Fits the sine at `s0` over ±`half_cycles` of phase; `phases` are the law's phases at `prof.s`.
+/// The law's phase at every bin of a profile, and the bin-attenuated cos/sin of it,
+/// computed once and shared by all the local fits along the strip.
+#[derive(Debug, Clone)]
+pub struct PhaseTable {
+    /// Phase (cycles) at each bin's mean s.
+    pub phase: Vec<f64>,
+    /// att·cos 2πφ at each bin (att: the bin's own averaging attenuation).
+    pub cos: Vec<f64>,
+    /// att·sin 2πφ at each bin.
+    pub sin: Vec<f64>,
+}
+
+impl PhaseTable {
+    /// Tabulates `law` over the bins of `prof`.
+    pub fn new(prof: &Profile, law: &PhaseLaw) -> PhaseTable {
+        let n = prof.s.len();
+        let (mut phase, mut cos, mut sin) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        for k in 0..n {
+            let s = prof.s[k];
+            let ph = law.phase(s);
+            let att = if prof.var_s[k] > 0.0 {
+                bin_attenuation(law.freq(s), prof.var_s[k])
+            } else {
+                1.0
+            };
+            let (sn, cs) = (2.0 * PI * ph.rem_euclid(1.0)).sin_cos();
+            phase.push(ph);
+            cos.push(att * cs);
+            sin.push(att * sn);
+        }
+        PhaseTable { phase, cos, sin }
+    }
+}
+
+/// Fits the sine at `s0` over ±`half_cycles` of phase, with biweight weights
+/// (1 − u²)² in phase (u = phase distance / half window) times the bin counts.
 pub fn local_fit(
     prof: &Profile,
-    phases: &[f64],
+    table: &PhaseTable,
     law: &PhaseLaw,
     s0: f64,
     half_cycles: f64,
 ) -> Option<LocalFit> {
+    let phases = &table.phase;
     let p0 = law.phase(s0);
     let a = phases.partition_point(|&p| p < p0 - half_cycles);
     let b = phases.partition_point(|&p| p <= p0 + half_cycles);
@@ -68,33 +108,25 @@ pub fn local_fit(
         return None;
     }
     let scale = (prof.s[b - 1] - prof.s[a]).max(1e-300);
-    let mut ata = [[0.0f64; 4]; 4];
-    let mut aty = [0.0f64; 4];
     let row = |k: usize| -> ([f64; 4], f64) {
-        let ph = phases[k];
-        let taper = (PI * (ph - p0) / (2.0 * half_cycles)).cos().powi(2);
-        let att = bin_attenuation(law.freq(prof.s[k]), prof.var_s[k]);
-        let arg = 2.0 * PI * ph;
+        let u = (phases[k] - p0) / half_cycles;
+        let taper = (1.0 - u * u).max(0.0).powi(2);
         (
-            [
-                1.0,
-                (prof.s[k] - s0) / scale,
-                att * arg.cos(),
-                att * arg.sin(),
-            ],
-            taper * prof.count[k],
+            [1.0, (prof.s[k] - s0) / scale, table.cos[k], table.sin[k]],
+            taper,
         )
     };
-    let mut rows = Vec::with_capacity(b - a);
+    let mut ata = [[0.0f64; 4]; 4];
+    let mut aty = [0.0f64; 4];
     for k in a..b {
-        let (x, w) = row(k);
+        let (x, taper) = row(k);
+        let w = taper * prof.count[k];
         for i in 0..4 {
             aty[i] += w * x[i] * prof.y[k];
             for j in i..4 {
                 ata[i][j] += w * x[i] * x[j];
             }
         }
-        rows.push((x, w));
     }
     for i in 0..4 {
         for j in 0..i {
@@ -105,36 +137,41 @@ pub fn local_fit(
     let c: Vec<f64> = (0..4)
         .map(|i| (0..4).map(|j| inv[i][j] * aty[j]).sum())
         .collect();
-    // Residual variance per unit count (i.e. per sample), and the sandwich covariance of (a, b).
+    // Residual variance per sample, and the sandwich covariance of (a, b).
     let mut rss = 0.0;
     let mut wsum = 0.0;
     let mut meat = [[0.0f64; 4]; 4];
-    for (k, (x, w)) in (a..b).zip(&rows) {
+    for k in a..b {
+        let (x, taper) = row(k);
         let pred: f64 = (0..4).map(|i| c[i] * x[i]).sum();
         let r = prof.y[k] - pred;
-        let taper = w / prof.count[k];
         rss += taper * prof.count[k] * r * r;
         wsum += taper;
         // Var(bin mean) = σ²/count; weight w = taper·count → w²σ²/count = taper²·count·σ².
         let q = taper * taper * prof.count[k];
         for i in 0..4 {
-            for j in 0..4 {
+            for j in i..4 {
                 meat[i][j] += q * x[i] * x[j];
             }
         }
     }
+    for i in 0..4 {
+        for j in 0..i {
+            meat[i][j] = meat[j][i];
+        }
+    }
     let n = (b - a) as f64;
     let sigma2 = rss / wsum.max(1e-300) * n / (n - 4.0).max(1.0);
-    let cov = |i: usize, j: usize| -> f64 {
+    let cov = |i: usize| -> f64 {
         let mut acc = 0.0;
         for p in 0..4 {
             for q in 0..4 {
-                acc += inv[i][p] * meat[p][q] * inv[q][j];
+                acc += inv[i][p] * meat[p][q] * inv[q][i];
             }
         }
         acc * sigma2
     };
-    let (va, vb) = (cov(2, 2), cov(3, 3));
+    let (va, vb) = (cov(2), cov(3));
     let a2 = c[2] * c[2] + c[3] * c[3];
     let amp = (a2 - va - vb).max(0.0).sqrt();
     let theta = c[3].atan2(c[2]);
@@ -195,10 +232,10 @@ impl Estimator for SineFit {
     }
 
     fn estimate(&self, prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<ModPoint> {
-        let phases: Vec<f64> = prof.s.iter().map(|&s| law.phase(s)).collect();
+        let table = PhaseTable::new(prof, law);
         grid.iter()
             .filter_map(|&s0| {
-                let f = local_fit(prof, &phases, law, s0, 0.5 * self.window_cycles)?;
+                let f = local_fit(prof, &table, law, s0, 0.5 * self.window_cycles)?;
                 (f.mean > 0.0 && f.cycles >= 0.8 * self.window_cycles.min(3.0)).then(|| ModPoint {
                     s: s0,
                     modulation: f.modulation(),
