@@ -640,6 +640,27 @@ fn bad_input_one_line_exit_code_no_files() {
         let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert!(left.is_empty(), "{args:?} left {left:?}");
     }
+    // A failure after the temporary files exist (the final name is a folder):
+    // exit 6 and the temporary files are gone.
+    std::fs::create_dir(dir.path().join("d.png")).unwrap();
+    let out = run(
+        dir.path(),
+        &[
+            "--f-min", "0.5", "--f-max", "0.8", "--dpi", "100", "-o", "d.png",
+        ],
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(6),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    assert_eq!(names, ["d.png"], "temporary files left behind");
+    std::fs::remove_dir(dir.path().join("d.png")).unwrap();
     // An unwritable existing folder: nothing half-written is left behind.
     let ro = dir.path().join("ro");
     std::fs::create_dir(&ro).unwrap();
@@ -746,4 +767,66 @@ fn unreadable_description_is_reported() {
     let p = dir.path().join("bad.toml");
     std::fs::write(&p, "name = 3").unwrap();
     assert!(matches!(Target::load(&p), Err(TargetError::Parse { .. })));
+}
+
+#[test]
+fn gamma_encoding_gives_requested_modulation() {
+    let dir = tempfile::tempdir().unwrap();
+    let (png, t) = make(
+        dir.path(),
+        "g.png",
+        &[
+            "--law",
+            "patches",
+            "--f-min",
+            "0.3",
+            "--f-max",
+            "1",
+            "--patches",
+            "4",
+            "--dpi",
+            "150",
+            "--gamma",
+            "2.2",
+            "--contrast",
+            "0.5",
+        ],
+    );
+    let img = load_luma16(&png);
+    let pitch = 25.4 / DPI;
+    let refl = |i: usize, j: u32| (img.get_pixel(i as u32, j)[0] as f64 / 65535.0).powf(2.2);
+    for g in &t.greys {
+        let (i, j) = (
+            ((g.rect.x_mm + g.rect.width_mm / 2.0) / pitch) as usize,
+            ((g.rect.y_mm + g.rect.height_mm / 2.0) / pitch) as u32,
+        );
+        assert!((refl(i, j) - g.reflectance).abs() < 1e-4, "{}", g.id);
+    }
+    for p in &t.patches {
+        let j = ((p.rect.y_mm + p.rect.height_mm / 2.0) / pitch) as u32;
+        let i0 = (p.rect.x_mm / pitch).ceil() as usize;
+        let i1 = ((p.rect.x_mm + p.rect.width_mm) / pitch - 1.0).floor() as usize;
+        let mut m = [[0.0f64; 4]; 3];
+        for i in i0..i1 {
+            let ph = 2.0
+                * std::f64::consts::PI
+                * p.freq_cy_mm
+                * ((i as f64 + 0.5) * pitch - p.rect.x_mm);
+            let b = [1.0, ph.cos(), ph.sin()];
+            for u in 0..3 {
+                for w in 0..3 {
+                    m[u][w] += b[u] * b[w];
+                }
+                m[u][3] += b[u] * refl(i, j);
+            }
+        }
+        let s = solve3(m);
+        let modulation = s[1].hypot(s[2]) / s[0];
+        assert!(
+            (modulation / 0.5 - 1.0).abs() < 0.005,
+            "{}: {modulation}",
+            p.id
+        );
+        assert!((s[0] - 0.5).abs() < 0.0025);
+    }
 }
