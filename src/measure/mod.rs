@@ -344,8 +344,25 @@ pub fn measure_decoded(
         failure,
     };
     check_options(opts).map_err(err)?;
-    let roi = resolve_roi(opts, dec.width, dec.height).map_err(err)?;
     let mut warnings = Vec::new();
+    let roi = match (opts.roi, target) {
+        // No region but a target: find the chart from its fiducials.
+        (None, Some(t)) => {
+            let full = Crop {
+                x0: 0,
+                y0: 0,
+                x1: dec.width,
+                y1: dec.height,
+            };
+            let grey = planes(dec, full, &default_tone(dec.bits()).0, Channel::Luma);
+            let loc = crate::locate::find_chart(&grey[0], t, None)
+                .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
+            warnings.extend(loc.warnings);
+            warnings.push("region found automatically from the target's fiducials".into());
+            loc.corners_px
+        }
+        _ => resolve_roi(opts, dec.width, dec.height).map_err(err)?,
+    };
     // Crop: the region's bounding box (+2 px).
     let crop = bbox_crop(&roi, dec.width, dec.height, 2.0);
     let (tone, tone_desc) = if opts.tone_chart {
@@ -443,7 +460,7 @@ fn check_options(o: &MeasureOptions) -> Result<(), Failure> {
 }
 
 fn resolve_roi(opts: &MeasureOptions, w: usize, h: usize) -> Result<[Point; 4], Failure> {
-    // Hook for automatic location: when `crate::locate::find_chart` exists, call it here.
+    // Without --target there is nothing to locate (measure_decoded calls `locate` when a target is given).
     let roi = opts.roi.ok_or(Failure::NoRoi)?;
     check_quad(&roi).map_err(|e| match e {
         GeometryError::SelfCrossing => {

@@ -148,39 +148,20 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
         length: strip.length,
         ..Profile::default()
     };
-    let m = inv.m;
-    // Visits every sample inside the region: f(bin, s, value).
-    let visit = |f: &mut dyn FnMut(usize, f64, f32)| {
-        for plane in planes {
-            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
-            // Sample rows whose centres lie within the quad's vertical extent.
-            let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
-            let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
-            for j in j0..j1 {
-                let y = oy + j as f64 * sy;
-                let Some((xa, xb)) = row_span(&quad, y) else {
-                    continue;
-                };
-                let i0 = ((xa - ox) / sx).ceil().max(0.0) as usize;
-                let i1 = (((xb - ox) / sx).floor() + 1.0).clamp(0.0, plane.width as f64) as usize;
-                let row = &plane.data[j * plane.width..(j + 1) * plane.width];
-                // Along a row the homography's numerators and denominator are linear in x.
-                let (ns0, nt0, w0) = (m[1] * y + m[2], m[4] * y + m[5], m[7] * y + m[8]);
-                for (i, &v) in row.iter().enumerate().take(i1).skip(i0) {
-                    let x = ox + i as f64 * sx;
-                    let rw = 1.0 / (m[6] * x + w0);
-                    let s = (m[0] * x + ns0) * rw;
-                    let t = (m[3] * x + nt0) * rw;
-                    if !(t >= t0 && t <= t1 && s >= s_lo && s <= s_hi) {
-                        continue;
-                    }
-                    f(((s / bin) as usize).min(nbins - 1), s, v);
-                }
-            }
-        }
+    let region = Region {
+        planes,
+        quad,
+        m: inv.m,
+        ymin,
+        ymax,
+        t0,
+        t1,
+        s_lo,
+        s_hi,
+        bin,
+        nbins,
     };
-    visit(&mut |b, s, v| {
+    region.visit(|b, s, v| {
         prof.samples += 1;
         if v >= opts.clip_level {
             prof.clipped_high += 1;
@@ -212,7 +193,7 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
     let mut rsum = vec![0.0f64; nbins];
     let mut rn = vec![0u32; nbins];
     if any_limit {
-        visit(&mut |b, _, v| {
+        region.visit(|b, _, v| {
             if (v as f64 - mean[b]).abs() <= lim[b] {
                 rsum[b] += v as f64;
                 rn[b] += 1;
@@ -239,6 +220,59 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
         }
     }
     prof
+}
+
+/// The sampled region of a strip, for visiting its samples.
+struct Region<'a> {
+    planes: &'a [&'a Plane],
+    quad: [Point; 4],
+    m: [f64; 9],
+    ymin: f64,
+    ymax: f64,
+    t0: f64,
+    t1: f64,
+    s_lo: f64,
+    s_hi: f64,
+    bin: f64,
+    nbins: usize,
+}
+
+impl Region<'_> {
+    /// Calls f(bin, s, value) for every sample inside the region.
+    #[inline]
+    fn visit<F: FnMut(usize, f64, f32)>(&self, mut f: F) {
+        let m = &self.m;
+        for plane in self.planes {
+            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            // Sample rows whose centres lie within the quad's vertical extent.
+            let j0 = ((self.ymin - oy) / sy).ceil().max(0.0) as usize;
+            let j1 =
+                (((self.ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
+            for j in j0..j1 {
+                let y = oy + j as f64 * sy;
+                let Some((xa, xb)) = row_span(&self.quad, y) else {
+                    continue;
+                };
+                let i0 = ((xa - ox) / sx).ceil().max(0.0) as usize;
+                let i1 = (((xb - ox) / sx).floor() + 1.0).clamp(0.0, plane.width as f64) as usize;
+                let row = &plane.data[j * plane.width..(j + 1) * plane.width];
+                // Along a row the homography's numerators and denominator are linear in x.
+                let (ns0, nt0, w0) = (m[1] * y + m[2], m[4] * y + m[5], m[7] * y + m[8]);
+                let inv_bin = 1.0 / self.bin;
+                for (i, &v) in row.iter().enumerate().take(i1).skip(i0) {
+                    let x = ox + i as f64 * sx;
+                    let rw = 1.0 / (m[6] * x + w0);
+                    let s = (m[0] * x + ns0) * rw;
+                    let t = (m[3] * x + nt0) * rw;
+                    if !(t >= self.t0 && t <= self.t1 && s >= self.s_lo && s <= self.s_hi) {
+                        continue;
+                    }
+                    f(((s * inv_bin) as usize).min(self.nbins - 1), s, v);
+                }
+            }
+        }
+    }
 }
 
 /// The x-interval where the horizontal line at `y` crosses a convex quadrilateral.
