@@ -184,3 +184,72 @@ fn model_without_pitch_is_a_usage_error_and_missing_file_an_input_error() {
     assert!(err.contains("no_such_system.toml"), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
+
+/// `auto` with a real camera's EXIF (the Canon PowerShot S40 file's APP1 segment
+/// put into a simulated shot): diffraction at its f/4.9, the caption facts in
+/// the summary, and the model column against the closed form
+/// (2/π)(acos s − s√(1−s²))·|sinc f|, s = (f/p)·λ·N.
+#[test]
+fn auto_uses_the_exif_f_number() {
+    let canon = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/realdata/exif_jpeg/canon_powershot_s40_downscaled.jpg"
+    );
+    let Ok(src) = std::fs::read(canon) else {
+        eprintln!("skipped: {canon} not found");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let jpg = dir.path().join("shot.jpg");
+    cmd()
+        .args(["simulate", "--target", "demo:linear", "--system", SYSTEM])
+        .args(["--size", "1200x800", "--jpeg", "95", "-o"])
+        .arg(&jpg)
+        .assert()
+        .success();
+    let dst = std::fs::read(&jpg).unwrap();
+    let mut i = 2;
+    let app1 = loop {
+        let len = u16::from_be_bytes([src[i + 2], src[i + 3]]) as usize;
+        if src[i + 1] == 0xE1 && &src[i + 4..i + 8] == b"Exif" {
+            break &src[i..i + 2 + len];
+        }
+        i += 2 + len;
+    };
+    let photo = dir.path().join("canon.jpg");
+    std::fs::write(&photo, [&dst[..2], app1, &dst[2..]].concat()).unwrap();
+    let out = dir.path().join("out");
+    cmd()
+        .arg("measure")
+        .arg(&photo)
+        .args(["--roi", "200,200,1000,200,1000,400,200,400"])
+        .args(["--pixel-pitch", "4.3um", "--model", "auto", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("canon.summary.json")).unwrap()).unwrap();
+    assert_eq!(s["exif"]["f_number"].as_f64(), Some(4.9));
+    let desc = s["exif"]["description"].as_str().unwrap();
+    assert!(
+        desc.contains("Canon PowerShot S40") && desc.contains("f/4.9"),
+        "{desc}"
+    );
+    let mut r = csv::Reader::from_path(out.join("canon.mtf.csv")).unwrap();
+    let head = r.headers().unwrap().clone();
+    let col = |n: &str| head.iter().position(|h| h == n).unwrap();
+    let (fc, mc) = (col("freq_cy_px"), col("mtf_model"));
+    let pi = std::f64::consts::PI;
+    let mut n = 0;
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        let f: f64 = rec[fc].parse().unwrap();
+        let v: f64 = rec[mc].parse().unwrap();
+        let s = f / 0.0043 * 550e-6 * 4.9;
+        let want =
+            2.0 / pi * (s.acos() - s * (1.0 - s * s).sqrt()) * ((pi * f).sin() / (pi * f)).abs();
+        assert!((v - want).abs() < 2e-6, "{f}: {v} vs {want}");
+        n += 1;
+    }
+    assert!(n > 50, "{n}");
+}
