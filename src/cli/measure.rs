@@ -8,8 +8,8 @@ use std::time::Instant;
 use sweepmtf::measure::{Failure, MeasureError, MeasureOptions, Measurement, Method, SweepChoice};
 use sweepmtf::photo::linearise::Channel;
 use sweepmtf::report::atomic::write_all_atomic;
-use sweepmtf::report::json::{Timings, summary, summary_json};
-use sweepmtf::report::mtf_plot::{PlotFormat, mtf_plot};
+use sweepmtf::report::json::{Timings, summary};
+use sweepmtf::report::mtf_plot::{PlotFormat, mtf_plot_with};
 use sweepmtf::report::{csv, roi_plot};
 
 /// Arguments of `sweepmtf measure`.
@@ -49,6 +49,9 @@ pub struct Args {
     /// Print the JSON summary on stdout instead of the summary line.
     #[arg(long)]
     pub json: bool,
+    /// Model beside the measurement (`--model`, `--wavelength`).
+    #[command(flatten)]
+    pub model: super::measure_model::ModelArgs,
     /// Output folder.
     #[arg(short = 'o', long = "out", default_value = ".", value_name = "DIR")]
     pub out: PathBuf,
@@ -206,9 +209,11 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     let opts = options(a)?;
     let plot_format = a.plot;
     let name = a.photo.display().to_string();
+    let prepared = super::measure_model::prepare(&a.model, &a.photo)?;
     let t1 = Instant::now();
     let m = sweepmtf::measure::measure_file(&a.photo, &opts).map_err(fail)?;
     let t2 = Instant::now();
+    let extras = prepared.finish(&m)?;
 
     let stem = a
         .photo
@@ -229,7 +234,7 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     if m.curves.is_empty() {
         files.push((csv_path.clone(), csv::patches_csv(&m)));
     } else {
-        files.push((csv_path.clone(), csv::curves_csv(&m)));
+        files.push((csv_path.clone(), extras.csv(csv::curves_csv(&m))));
         if !m.patches.is_empty() {
             files.push((out("patches.csv"), csv::patches_csv(&m)));
         }
@@ -238,22 +243,28 @@ pub fn run(a: &Args) -> Result<(), CliError> {
         PlotFormat::Png => "mtf.png",
         PlotFormat::Svg => "mtf.svg",
     };
-    files.push((out(plot_ext), mtf_plot(&m, plot_format).map_err(out_err)?));
+    files.push((
+        out(plot_ext),
+        mtf_plot_with(&m, plot_format, &extras.plot).map_err(out_err)?,
+    ));
     files.push((out("roi.png"), roi_plot::roi_plot(&m).map_err(out_err)?));
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     let timings = Timings {
         measure_ms: ms(t1, t2),
         total_ms: ms(t_start, Instant::now()),
     };
-    files.push((out("summary.json"), summary_json(&m, Some(timings))));
+    let summary_value = extras.json(summary(&m, Some(timings)));
+    let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
+    summary_text.push('\n');
+    files.push((out("summary.json"), summary_text.into_bytes()));
     write_all_atomic(&files).map_err(out_err)?;
     for w in &m.warnings {
         eprintln!("sweepmtf: warning: {name}: {w}");
     }
     if a.json {
-        println!("{}", summary(&m, Some(timings)));
+        println!("{summary_value}");
     } else {
-        println!("{}", summary_line(&m, &csv_path));
+        println!("{}{}", summary_line(&m, &csv_path), extras.line_suffix());
     }
     Ok(())
 }

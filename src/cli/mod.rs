@@ -8,6 +8,7 @@ mod chart;
 mod exit;
 mod factors;
 mod measure;
+mod measure_model;
 mod model;
 mod simulate;
 

@@ -6,6 +6,7 @@ pub mod json;
 pub mod model_cut;
 pub mod model_io;
 pub mod model_map;
+pub mod model_overlay;
 pub mod model_points;
 pub mod mtf_plot;
 pub mod roi_plot;

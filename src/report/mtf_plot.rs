@@ -3,6 +3,7 @@
 //! bars. PNG or SVG.
 
 use super::atomic::ReportError;
+use super::model_overlay::PlotExtras;
 use crate::measure::Measurement;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -34,13 +35,22 @@ fn err(e: impl std::fmt::Display) -> ReportError {
 
 /// Renders the MTF plot to bytes (PNG or SVG).
 pub fn mtf_plot(m: &Measurement, format: PlotFormat) -> Result<Vec<u8>, ReportError> {
+    mtf_plot_with(m, format, &PlotExtras::default())
+}
+
+/// Renders the MTF plot with extras (dashed model curves, a caption line) to bytes.
+pub fn mtf_plot_with(
+    m: &Measurement,
+    format: PlotFormat,
+    extras: &PlotExtras,
+) -> Result<Vec<u8>, ReportError> {
     crate::plot::ensure_font();
     match format {
         PlotFormat::Svg => {
             let mut s = String::new();
             {
                 let root = SVGBackend::with_string(&mut s, (W, H)).into_drawing_area();
-                draw(&root, m)?;
+                draw(&root, m, extras)?;
                 root.present().map_err(err)?;
             }
             Ok(s.into_bytes())
@@ -49,7 +59,7 @@ pub fn mtf_plot(m: &Measurement, format: PlotFormat) -> Result<Vec<u8>, ReportEr
             let mut buf = vec![255u8; (W * H * 3) as usize];
             {
                 let root = BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area();
-                draw(&root, m)?;
+                draw(&root, m, extras)?;
                 root.present().map_err(err)?;
             }
             super::roi_plot::encode_png(buf, W, H)
@@ -60,6 +70,7 @@ pub fn mtf_plot(m: &Measurement, format: PlotFormat) -> Result<Vec<u8>, ReportEr
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     m: &Measurement,
+    extras: &PlotExtras,
 ) -> Result<(), ReportError>
 where
     DB::ErrorType: 'static,
@@ -92,6 +103,7 @@ where
         ),
         None => "spatial frequency (cycles/pixel)".to_string(),
     };
+    let root = &super::model_overlay::caption_area(root, &extras.caption).map_err(err)?;
     let mut chart = ChartBuilder::on(root)
         .caption(title, (crate::plot::FONT, 22))
         .margin(14)
@@ -177,6 +189,7 @@ where
                 .map_err(err)?;
         }
     }
+    super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     if !m.patches.is_empty() {
         let col = RGBColor(230, 120, 20);
         chart
