@@ -67,9 +67,22 @@ fn label(r: &ShotRecord) -> String {
     }
 }
 
-/// An f-number as photographers write it (4, 5.6, 11).
+/// Standard f-numbers in third stops, as lenses mark them.
+const F_STOPS: [f64; 37] = [
+    1.0, 1.1, 1.2, 1.4, 1.6, 1.8, 2.0, 2.2, 2.5, 2.8, 3.2, 3.5, 4.0, 4.5, 5.0, 5.6, 6.3, 7.1, 8.0,
+    9.0, 10.0, 11.0, 13.0, 14.0, 16.0, 18.0, 20.0, 22.0, 25.0, 29.0, 32.0, 36.0, 40.0, 45.0, 51.0,
+    57.0, 64.0,
+];
+
+/// An f-number as photographers write it (4, 5.6, 11): the nearest marked
+/// third stop when within 3 %, else one decimal.
 pub fn fmt_fnumber(n: f64) -> String {
-    let s = format!("{n:.1}");
+    let near = F_STOPS
+        .iter()
+        .copied()
+        .min_by(|a, b| (a / n).ln().abs().total_cmp(&(b / n).ln().abs()))
+        .filter(|s| (s / n - 1.0).abs() < 0.03);
+    let s = format!("{:.1}", near.unwrap_or(n));
     s.trim_end_matches(".0").to_string()
 }
 
@@ -142,10 +155,32 @@ pub fn curves_png(curves: &[(&ShotRecord, Vec<(f64, f64)>)]) -> Result<Vec<u8>, 
         chart
             .draw_series(std::iter::once(Text::new(
                 "Nyquist",
-                (0.505, m_max * 0.97),
+                (0.5 - f_max * 0.075, m_max * 0.985),
                 (FONT, 14).into_font().color(&grey),
             )))
             .map_err(|e| e.to_string())?;
+        // With many curves there is no legend: say what the colours mean.
+        let fnums: Vec<f64> = curves.iter().filter_map(|c| c.0.result.f_number).collect();
+        if curves.len() > TAB10.len() {
+            let note = if fnums.len() == curves.len() {
+                let lo = fnums.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = fnums.iter().copied().fold(0.0, f64::max);
+                format!(
+                    "colour: f/{} (dark purple) → f/{} (yellow)",
+                    fmt_fnumber(lo),
+                    fmt_fnumber(hi)
+                )
+            } else {
+                "colour: file order, dark purple → yellow".to_string()
+            };
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    note,
+                    (f_max * 0.02, m_max * 0.06),
+                    (FONT, 14).into_font().color(&grey),
+                )))
+                .map_err(|e| e.to_string())?;
+        }
         let legend = curves.len() <= 12;
         for (rank, &i) in order.iter().enumerate() {
             let (rec, pts) = &curves[i];
@@ -224,8 +259,10 @@ pub fn mtf50_f_number_png(records: &[ShotRecord]) -> Result<Option<Vec<u8>>, Str
         .filter_map(|r| Some((r.result.f_number?, r.result.mtf50_cy_px?)))
         .filter(|(n, m)| n.is_finite() && *n > 0.0 && m.is_finite())
         .collect();
-    let n_lo = groups.first().map(|g| g.0).unwrap_or(1.0) / 1.25;
-    let n_hi = groups.last().map(|g| g.0).unwrap_or(1.0) * 1.25;
+    // The x axis is in stops (log2 of the f-number squared), labelled as f-numbers.
+    let stop = |n: f64| 2.0 * n.log2();
+    let x_lo = stop(groups.first().map(|g| g.0).unwrap_or(1.0)) - 0.5;
+    let x_hi = stop(groups.last().map(|g| g.0).unwrap_or(1.0)) + 0.5;
     let m_hi = pts.iter().map(|p| p.1).fold(0.0f64, f64::max).max(0.05) * 1.2;
     let best = groups
         .iter()
@@ -241,13 +278,14 @@ pub fn mtf50_f_number_png(records: &[ShotRecord]) -> Result<Option<Vec<u8>>, Str
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(70)
-            .build_cartesian_2d((n_lo..n_hi).log_scale(), 0.0..m_hi)
+            .build_cartesian_2d(x_lo..x_hi, 0.0..m_hi)
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
             .x_desc("f-number")
             .y_desc("MTF50 (cycles/pixel)")
-            .x_label_formatter(&|n| format!("f/{}", fmt_fnumber(*n)))
+            .x_labels(((x_hi - x_lo).ceil() as usize + 1).max(2))
+            .x_label_formatter(&|x| format!("f/{}", fmt_fnumber(2f64.powf(x / 2.0))))
             .label_style((FONT, 15))
             .axis_desc_style((FONT, 17))
             .light_line_style(RGBColor(235, 235, 235))
@@ -256,14 +294,14 @@ pub fn mtf50_f_number_png(records: &[ShotRecord]) -> Result<Option<Vec<u8>>, Str
         let blue = RGBColor(31, 119, 180);
         chart
             .draw_series(LineSeries::new(
-                groups.iter().map(|g| (g.0, g.1)),
+                groups.iter().map(|g| (stop(g.0), g.1)),
                 blue.stroke_width(2),
             ))
             .map_err(|e| e.to_string())?;
         chart
             .draw_series(
                 pts.iter()
-                    .map(|&p| Circle::new(p, 4, blue.mix(0.6).filled())),
+                    .map(|&(n, m)| Circle::new((stop(n), m), 4, blue.mix(0.6).filled())),
             )
             .map_err(|e| e.to_string())?;
         let red = RGBColor(214, 39, 40);
@@ -281,7 +319,7 @@ pub fn mtf50_f_number_png(records: &[ShotRecord]) -> Result<Option<Vec<u8>>, Str
                     fmt_fnumber(best.0),
                     best.1
                 ),
-                (best.0, best.1 + m_hi * 0.05),
+                (stop(best.0) - 0.3, best.1 + m_hi * 0.05),
                 (FONT, 15).into_font().color(&red),
             )))
             .map_err(|e| e.to_string())?;
@@ -331,5 +369,9 @@ mod tests {
         assert_eq!(fmt_fnumber(4.0), "4");
         assert_eq!(fmt_fnumber(5.6), "5.6");
         assert_eq!(fmt_fnumber(11.0), "11");
+        // 2^(5/2) = 5.66 and 2^(7/2) = 11.3 are marked 5.6 and 11.
+        assert_eq!(fmt_fnumber(2f64.powf(2.5)), "5.6");
+        assert_eq!(fmt_fnumber(2f64.powf(3.5)), "11");
+        assert_eq!(fmt_fnumber(3.0), "3");
     }
 }
