@@ -32,7 +32,7 @@ fn good_folder_gives_summary_pictures_and_report() {
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("batch_report");
     let _ = fs::remove_dir_all(&out);
     let job = StubJob::new("a", 0);
-    let o = run(&[shots.clone()], &out, &job, &opts(2));
+    let o = run(std::slice::from_ref(&shots), &out, &job, &opts(2));
     assert_eq!(o.run.failed(), 0);
     let rows = read_summary(&out.join("summary.csv"));
     assert_eq!(rows.len(), 16);
@@ -87,7 +87,7 @@ fn bad_files_become_error_rows_and_good_shots_are_measured() {
 
     let out = d.path().join("out");
     let job = StubJob::new("a", 0);
-    let o = run(&[shots.clone()], &out, &job, &opts(2));
+    let o = run(std::slice::from_ref(&shots), &out, &job, &opts(2));
     let rows = read_summary(&out.join("summary.csv"));
     assert_eq!(rows.len(), 30);
     let errors: Vec<_> = rows.iter().filter(|r| r["status"] == "error").collect();
@@ -130,14 +130,14 @@ fn rerun_skips_complete_shots_and_redoes_changed_ones() {
     let out = d.path().join("out");
 
     let job = StubJob::new("a", 0);
-    let first = run(&[shots.clone()], &out, &job, &opts(2));
+    let first = run(std::slice::from_ref(&shots), &out, &job, &opts(2));
     assert_eq!((first.run.measured, first.run.skipped), (9, 0));
     let summary1 = fs::read(out.join("summary.csv")).unwrap();
     let shots_before = snapshot(&out.join("shots"));
 
     // Unchanged: nothing is measured, nothing rewritten, same table.
     let job = StubJob::new("a", 0);
-    let again = run(&[shots.clone()], &out, &job, &opts(2));
+    let again = run(std::slice::from_ref(&shots), &out, &job, &opts(2));
     assert_eq!((again.run.measured, again.run.skipped), (0, 9));
     assert_eq!(job.started.load(Ordering::SeqCst), 0);
     assert_eq!(fs::read(out.join("summary.csv")).unwrap(), summary1);
@@ -146,7 +146,7 @@ fn rerun_skips_complete_shots_and_redoes_changed_ones() {
     // Retry failed: only the error shot.
     let job = StubJob::new("a", 0);
     let o = batch::run_batch(
-        &batch::plan(&[shots.clone()], true, &out, Shard::ALL).unwrap(),
+        &batch::plan(std::slice::from_ref(&shots), true, &out, Shard::ALL).unwrap(),
         &out,
         &job,
         &RunOptions {
@@ -163,7 +163,7 @@ fn rerun_skips_complete_shots_and_redoes_changed_ones() {
     let first_stem = &first.run.records[0].stem;
     fs::remove_file(out.join("shots").join(format!("{first_stem}.stub.txt"))).unwrap();
     let job = StubJob::new("a", 0);
-    let o = run(&[shots.clone()], &out, &job, &opts(2));
+    let o = run(std::slice::from_ref(&shots), &out, &job, &opts(2));
     assert_eq!((o.run.measured, o.run.skipped), (2, 7));
     let row = o
         .run
@@ -175,11 +175,11 @@ fn rerun_skips_complete_shots_and_redoes_changed_ones() {
 
     // Changed settings redo everything; so does --force.
     let job = StubJob::new("b", 0);
-    let o = run(&[shots.clone()], &out, &job, &opts(2));
+    let o = run(std::slice::from_ref(&shots), &out, &job, &opts(2));
     assert_eq!((o.run.measured, o.run.skipped), (9, 0));
     let job = StubJob::new("b", 0);
     let o = run(
-        &[shots.clone()],
+        std::slice::from_ref(&shots),
         &out,
         &job,
         &RunOptions {
@@ -198,7 +198,7 @@ fn workers_are_bounded_by_jobs() {
     for jobs in [1, 3] {
         let out = d.path().join(format!("out{jobs}"));
         let job = StubJob::new("a", 40);
-        run(&[shots.clone()], &out, &job, &opts(jobs));
+        run(std::slice::from_ref(&shots), &out, &job, &opts(jobs));
         assert_eq!(job.max_running.load(Ordering::SeqCst), jobs);
         assert_eq!(job.started.load(Ordering::SeqCst), 12);
     }
