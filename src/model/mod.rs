@@ -5,7 +5,10 @@
 //! Frequencies are in cycles/mm and lengths in millimetres inside the model;
 //! axes: x right, y up; OTF = (1/Area)∬p(x,y)·exp(−j2π(ux+vy)) dx dy.
 
+pub mod aperture;
 pub mod params;
+pub mod sampling;
+pub mod special;
 
 use num_complex::Complex64;
 use thiserror::Error;
