@@ -3,6 +3,10 @@
 //! linear values on known pixel sites, which the measurement bins without
 //! resampling (a Bayer colour's sites are a sparse plane; no demosaicing).
 
+pub mod exif;
+pub mod pitch;
+pub mod raw;
+
 /// One channel of linear-light samples on a regular lattice of image pixel sites.
 ///
 /// Sample `(i, j)` (column i, row j) sits at the image pixel whose centre is

@@ -225,20 +225,35 @@ impl Polygon {
                 break;
             }
         }
-        for j in 0..n {
-            let a = self.verts[j];
-            let b = self.verts[(j + 1) % n];
-            let tri = 0.5 * cross(a, b);
-            let x = qx * a[0] + qy * a[1];
-            let y = qx * b[0] + qy * b[1];
-            let mut h = 1.0;
-            let mut ypow = 1.0;
-            s[0] += tri;
-            for sk in s.iter_mut().take(n_max + 1).skip(1) {
-                ypow *= y;
-                h = x * h + ypow;
-                *sk += tri * h;
+        // edges in chunks of LANES so the hₙ recurrences of different edges
+        // run side by side instead of one long dependency chain
+        const LANES: usize = 8;
+        let mut j0 = 0;
+        while j0 < n {
+            let m = LANES.min(n - j0);
+            let mut tri = [0.0f64; LANES];
+            let mut x = [0.0f64; LANES];
+            let mut y = [0.0f64; LANES];
+            for l in 0..m {
+                let a = self.verts[j0 + l];
+                let b = self.verts[(j0 + l + 1) % n];
+                tri[l] = 0.5 * cross(a, b);
+                x[l] = qx * a[0] + qy * a[1];
+                y[l] = qx * b[0] + qy * b[1];
             }
+            let mut h = [1.0f64; LANES];
+            let mut ypow = [1.0f64; LANES];
+            s[0] += tri.iter().sum::<f64>();
+            for sk in s.iter_mut().take(n_max + 1).skip(1) {
+                let mut acc = 0.0;
+                for l in 0..LANES {
+                    ypow[l] *= y[l];
+                    h[l] = x[l] * h[l] + ypow[l];
+                    acc += tri[l] * h[l];
+                }
+                *sk += acc;
+            }
+            j0 += m;
         }
         // Σ (−i)^n · 2/(n+2)! · S_n
         let mut re = 0.0;
@@ -263,16 +278,39 @@ impl Polygon {
     fn edges(&self, u: f64, v: f64, f: f64) -> Complex64 {
         let (fx, fy) = (u / f, v / f);
         let n = self.verts.len();
+        // zⱼ = e^(iπ f·rⱼ), one sincospi per vertex; the edge phase
+        // e^(−i2π f·m) = conj(zₐ·z_b) and, where |f·e| ≥ 1/4, the sinc numerator
+        // sin(π f·e) = Im(z_b·conj zₐ) come from products (no cancellation there)
+        let phase = |p: [f64; 2]| u * p[0] + v * p[1];
+        let p0 = phase(self.verts[0]);
+        let (s0, c0) = sincospi(p0);
+        let (mut pa, mut sa, mut ca) = (p0, s0, c0);
         let mut re = 0.0;
         let mut im = 0.0;
         for j in 0..n {
             let a = self.verts[j];
+            let (pb, sb, cb) = if j + 1 == n {
+                (p0, s0, c0)
+            } else {
+                let pb = phase(self.verts[j + 1]);
+                let (sb, cb) = sincospi(pb);
+                (pb, sb, cb)
+            };
             let b = self.verts[(j + 1) % n];
             let e = sub(b, a);
-            let w = (fx * e[1] - fy * e[0]) * sinc(u * e[0] + v * e[1]);
-            let (s, c) = sincospi(u * (a[0] + b[0]) + v * (a[1] + b[1])); // 2 f·m
+            let t = pb - pa;
+            let sinc_fe = if t.abs() >= 0.25 {
+                (sb * ca - cb * sa) / (PI * t)
+            } else {
+                sinc(u * e[0] + v * e[1])
+            };
+            let w = (fx * e[1] - fy * e[0]) * sinc_fe;
+            // e^(−iπ(pₐ+p_b)) = conj(zₐ z_b)
+            let c = ca * cb - sa * sb;
+            let s = sa * cb + ca * sb;
             re += w * c;
             im -= w * s;
+            (pa, sa, ca) = (pb, sb, cb);
         }
         // multiply by i/(2π f)
         let k = 1.0 / (2.0 * PI * f);

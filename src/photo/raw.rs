@@ -1,0 +1,13 @@
+//! Camera raw files: decoding through `rawler` behind our own [`RawFrame`]
+//! (no other module sees the crate), linear CFA data with black levels
+//! subtracted per CFA site and scaled by the white level, the active area
+//! respected, clipped sites counted, and colour planes handed out as sparse
+//! [`super::Plane`]s without demosaicing. Decoder panics are contained and
+//! become errors for that file.
+
+mod decode;
+mod frame;
+mod guard;
+
+pub use decode::{RAW_EXTENSIONS, RawError, decode_raw, is_raw_path, read_raw_facts};
+pub use frame::{BlackLevels, CfaColour, CfaPattern, RawChannel, RawFrame};

@@ -1,0 +1,264 @@
+//! DNGs written here by a minimal hand-made TIFF writer, with known samples:
+//! an odd active-area offset, a default crop, a 2×2 per-site black-level
+//! pattern (all anchored at the active area, as DNG says) and a linear
+//! (demosaiced, no CFA) DNG, which must come out as R, G, B planes.
+
+use std::path::Path;
+use sweepmtf::photo::raw::{CfaPattern, RawChannel, decode_raw};
+
+enum V {
+    Short(Vec<u16>),
+    Long(Vec<u32>),
+    Byte(Vec<u8>),
+    Ascii(&'static str),
+}
+
+/// Little-endian TIFF with one IFD holding `tags` and one strip of u16 `data`.
+fn write_tiff(path: &Path, mut tags: Vec<(u16, V)>, data: &[u16]) {
+    let strip: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
+    tags.push((273, V::Long(vec![0]))); // patched below
+    tags.push((279, V::Long(vec![strip.len() as u32])));
+    tags.sort_by_key(|t| t.0);
+    let n = tags.len();
+    let ifd_at = 8usize;
+    let mut extra_at = ifd_at + 2 + 12 * n + 4;
+    let mut ifd = Vec::new();
+    let mut extra = Vec::new();
+    let strip_at = {
+        // size of out-of-line values first, to place the strip after them
+        let mut size = 0;
+        for (_, v) in &tags {
+            let b = bytes_of(v);
+            if b.len() > 4 {
+                size += b.len() + (b.len() & 1);
+            }
+        }
+        extra_at + size
+    };
+    ifd.extend((n as u16).to_le_bytes());
+    for (tag, v) in &tags {
+        let v = if *tag == 273 {
+            V::Long(vec![strip_at as u32])
+        } else {
+            clone(v)
+        };
+        let (typ, count) = match &v {
+            V::Short(s) => (3u16, s.len()),
+            V::Long(s) => (4, s.len()),
+            V::Byte(s) => (1, s.len()),
+            V::Ascii(s) => (2, s.len() + 1),
+        };
+        let b = bytes_of(&v);
+        ifd.extend(tag.to_le_bytes());
+        ifd.extend(typ.to_le_bytes());
+        ifd.extend((count as u32).to_le_bytes());
+        if b.len() <= 4 {
+            let mut w = b.clone();
+            w.resize(4, 0);
+            ifd.extend(w);
+        } else {
+            ifd.extend((extra_at as u32).to_le_bytes());
+            extra.extend(&b);
+            if b.len() & 1 == 1 {
+                extra.push(0);
+            }
+            extra_at += b.len() + (b.len() & 1);
+        }
+    }
+    ifd.extend(0u32.to_le_bytes());
+    let mut file = b"II*\0".to_vec();
+    file.extend((ifd_at as u32).to_le_bytes());
+    file.extend(ifd);
+    file.extend(extra);
+    assert_eq!(file.len(), strip_at);
+    file.extend(strip);
+    std::fs::write(path, file).unwrap();
+}
+
+fn clone(v: &V) -> V {
+    match v {
+        V::Short(s) => V::Short(s.clone()),
+        V::Long(s) => V::Long(s.clone()),
+        V::Byte(s) => V::Byte(s.clone()),
+        V::Ascii(s) => V::Ascii(s),
+    }
+}
+
+fn bytes_of(v: &V) -> Vec<u8> {
+    match v {
+        V::Short(s) => s.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        V::Long(s) => s.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        V::Byte(s) => s.clone(),
+        V::Ascii(s) => {
+            let mut b = s.as_bytes().to_vec();
+            b.push(0);
+            b
+        }
+    }
+}
+
+fn common(w: u32, h: u32, spp: u16, photometric: u16) -> Vec<(u16, V)> {
+    vec![
+        (254, V::Long(vec![0])),
+        (256, V::Long(vec![w])),
+        (257, V::Long(vec![h])),
+        (258, V::Short(vec![16; spp as usize])),
+        (259, V::Short(vec![1])),
+        (262, V::Short(vec![photometric])),
+        (271, V::Ascii("Testmaker")),
+        (272, V::Ascii("Synthetic One")),
+        (277, V::Short(vec![spp])),
+        (278, V::Long(vec![h])),
+        (284, V::Short(vec![1])),
+        (50706, V::Byte(vec![1, 4, 0, 0])),
+    ]
+}
+
+const W: usize = 10;
+const H: usize = 8;
+/// Active area top, left, bottom, right (odd left and top shift the CFA phase).
+const ACTIVE: [usize; 4] = [1, 3, 7, 9];
+const BLACK: [u32; 4] = [100, 110, 120, 130];
+const WHITE: u32 = 4000;
+
+fn dn(x: usize, y: usize) -> u16 {
+    (1000 + 37 * x + 101 * y) as u16
+}
+
+fn cfa_dng(path: &Path, crop: Option<([u32; 2], [u32; 2])>) {
+    let mut tags = common(W as u32, H as u32, 1, 32803);
+    tags.push((33421, V::Short(vec![2, 2])));
+    tags.push((33422, V::Byte(vec![1, 0, 2, 1]))); // GRBG from the active area's corner
+    tags.push((50713, V::Short(vec![2, 2])));
+    tags.push((50714, V::Long(BLACK.to_vec())));
+    tags.push((50717, V::Long(vec![WHITE])));
+    tags.push((50829, V::Long(ACTIVE.iter().map(|&a| a as u32).collect())));
+    if let Some((origin, size)) = crop {
+        tags.push((50719, V::Long(origin.to_vec())));
+        tags.push((50720, V::Long(size.to_vec())));
+    }
+    let data: Vec<u16> = (0..H).flat_map(|y| (0..W).map(move |x| dn(x, y))).collect();
+    write_tiff(path, tags, &data);
+}
+
+/// Colour letter and black level of full-image pixel (x, y), from the DNG rules.
+fn site(x: usize, y: usize) -> (char, f64) {
+    let (ax, ay) = (x - ACTIVE[1], y - ACTIVE[0]);
+    let colour = [['G', 'R'], ['B', 'G']][ay % 2][ax % 2];
+    (colour, BLACK[(ay % 2) * 2 + ax % 2] as f64)
+}
+
+fn check_cfa_frame(path: &Path, origin: (usize, usize), size: (usize, usize)) {
+    let f = decode_raw(path).unwrap();
+    assert_eq!((f.width, f.height), size);
+    assert_eq!(f.make, "Testmaker");
+    assert_eq!(f.model, "Synthetic One");
+    let pattern: String = (0..2)
+        .flat_map(|y| (0..2).map(move |x| (x, y)))
+        .map(|(x, y)| site(origin.0 + x, origin.1 + y).0)
+        .collect();
+    assert_eq!(f.cfa, CfaPattern::parse(&pattern), "{pattern}");
+    for (ch, letter) in [
+        (RawChannel::R, 'R'),
+        (RawChannel::G, 'G'),
+        (RawChannel::B, 'B'),
+    ] {
+        let planes = f.channel_planes(ch);
+        assert_eq!(planes.len(), if letter == 'G' { 2 } else { 1 });
+        let mut count = 0;
+        for p in &planes {
+            for j in 0..p.height {
+                for i in 0..p.width {
+                    let (cx, cy) = p.centre(i, j);
+                    let (x, y) = (origin.0 + cx as usize, origin.1 + cy as usize);
+                    let (c, black) = site(x, y);
+                    assert_eq!(c, letter, "({x},{y})");
+                    let want = (dn(x, y) as f64 - black) / (WHITE as f64 - black);
+                    assert!((p.get(i, j) as f64 - want).abs() < 1e-6, "({x},{y})");
+                    count += 1;
+                }
+            }
+        }
+        let all = (0..size.1)
+            .flat_map(|y| (0..size.0).map(move |x| (x, y)))
+            .filter(|&(x, y)| site(origin.0 + x, origin.1 + y).0 == letter)
+            .count();
+        assert_eq!(count, all, "{letter}: every site once");
+    }
+}
+
+#[test]
+fn odd_active_area_keeps_cfa_phase_and_per_site_black_levels() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("cfa.dng");
+    cfa_dng(&p, None);
+    check_cfa_frame(&p, (ACTIVE[1], ACTIVE[0]), (6, 6));
+}
+
+#[test]
+fn default_crop_inside_the_active_area_shifts_phase_and_black_pattern() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("crop.dng");
+    cfa_dng(&p, Some(([1, 1], [4, 3])));
+    check_cfa_frame(&p, (ACTIVE[1] + 1, ACTIVE[0] + 1), (4, 3));
+}
+
+#[test]
+fn linear_dng_without_cfa_gives_rgb_planes() {
+    let (w, h) = (5usize, 4usize);
+    let black = [10u32, 20, 30];
+    let white = [1000u32, 2000, 3000];
+    let v = |x: usize, y: usize, s: usize| (50 + 7 * x + 13 * y + 300 * s) as u16;
+    let mut tags = common(w as u32, h as u32, 3, 34892);
+    tags.push((50714, V::Long(black.to_vec())));
+    tags.push((50717, V::Long(white.to_vec())));
+    let data: Vec<u16> = (0..h)
+        .flat_map(|y| (0..w).flat_map(move |x| (0..3).map(move |s| v(x, y, s))))
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("linear.dng");
+    write_tiff(&p, tags, &data);
+    let f = decode_raw(&p).unwrap();
+    assert_eq!(f.cfa, None);
+    assert_eq!(f.samples_per_pixel, 3);
+    let groups = f.channel_groups(RawChannel::All);
+    assert_eq!(
+        groups.iter().map(|g| g.0).collect::<Vec<_>>(),
+        ["r", "g", "b"]
+    );
+    for (s, (_, planes)) in groups.iter().enumerate() {
+        assert_eq!(planes.len(), 1);
+        let p = &planes[0];
+        assert_eq!(
+            (p.width, p.height, p.step, p.offset),
+            (w, h, (1, 1), (0, 0))
+        );
+        for y in 0..h {
+            for x in 0..w {
+                let want = (v(x, y, s) as f64 - black[s] as f64) / (white[s] - black[s]) as f64;
+                assert!((p.get(x, y) as f64 - want).abs() < 1e-6);
+            }
+        }
+    }
+    assert_eq!(f.channel_planes(RawChannel::G).len(), 1);
+}
+
+#[test]
+fn clipped_sites_are_counted_per_sample_white_level() {
+    let mut tags = common(4, 2, 1, 32803);
+    tags.push((33421, V::Short(vec![2, 2])));
+    tags.push((33422, V::Byte(vec![0, 1, 1, 2])));
+    tags.push((50714, V::Long(vec![64])));
+    tags.push((50717, V::Long(vec![1000])));
+    let data = [999u16, 1000, 1001, 5, 65535, 0, 64, 1000];
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("clip.dng");
+    write_tiff(&p, tags, &data);
+    let f = decode_raw(&p).unwrap();
+    assert_eq!(f.clipped_sites, 4);
+    assert_eq!(f.clipped_fraction, 0.5);
+    // a clipped sample reads ≥ 1, black reads 0, below black reads < 0 (not clamped)
+    assert!(f.value(1, 0, 0) >= 1.0);
+    assert_eq!(f.value(2, 1, 0), 0.0);
+    assert!(f.value(1, 1, 0) < 0.0);
+}
