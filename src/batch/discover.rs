@@ -37,6 +37,41 @@ fn is_hidden(name: &std::ffi::OsStr) -> bool {
     name.to_string_lossy().starts_with('.')
 }
 
+/// Compares paths the way people count: digit runs by their value
+/// (`f2.8` < `f4` < `f11`, `shot9` < `shot10`), everything else by its
+/// bytes; ties (`01` against `1`) fall back to plain text order, so the
+/// order is total and deterministic.
+pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    use std::cmp::Ordering;
+    let (ab, bb) = (a.as_bytes(), b.as_bytes());
+    let (mut i, mut j) = (0, 0);
+    while i < ab.len() && j < bb.len() {
+        if ab[i].is_ascii_digit() && bb[j].is_ascii_digit() {
+            let si = i;
+            while i < ab.len() && ab[i].is_ascii_digit() {
+                i += 1;
+            }
+            let sj = j;
+            while j < bb.len() && bb[j].is_ascii_digit() {
+                j += 1;
+            }
+            let na = a[si..i].trim_start_matches('0');
+            let nb = b[sj..j].trim_start_matches('0');
+            let o = na.len().cmp(&nb.len()).then_with(|| na.cmp(nb));
+            if o != Ordering::Equal {
+                return o;
+            }
+        } else {
+            if ab[i] != bb[j] {
+                return ab[i].cmp(&bb[j]);
+            }
+            i += 1;
+            j += 1;
+        }
+    }
+    (ab.len() - i).cmp(&(bb.len() - j)).then_with(|| a.cmp(b))
+}
+
 /// Finds the photos in `inputs` (folders or single files), searching
 /// sub-folders when `recursive`, skipping anything inside `exclude` (the
 /// output folder). Order: inputs as given, then paths sorted by their text.
@@ -60,7 +95,7 @@ pub fn discover(
             found.push((name, input.clone()));
         } else {
             walk(input, "", recursive, exclude.as_deref(), &mut found)?;
-            found.sort_by(|a, b| a.0.cmp(&b.0));
+            found.sort_by(|a, b| natural_cmp(&a.0, &b.0));
         }
         for (rel, source) in found {
             let key = fs::canonicalize(&source).unwrap_or_else(|_| source.clone());
@@ -195,6 +230,36 @@ mod tests {
         let found = discover(&inputs, false, None).unwrap();
         let names: Vec<_> = found.iter().map(|s| s.display.as_str()).collect();
         assert_eq!(names, ["one/x.jpg", "two/x.jpg"]);
+    }
+
+    #[test]
+    fn natural_order_counts_numbers() {
+        let mut v = vec![
+            "f11.jpg",
+            "f2.8.jpg",
+            "f4.jpg",
+            "f5.6.jpg",
+            "shot10.png",
+            "shot9.png",
+            "shot09.png",
+            "a/b.png",
+            "a.png",
+        ];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            v,
+            [
+                "a.png",
+                "a/b.png",
+                "f2.8.jpg",
+                "f4.jpg",
+                "f5.6.jpg",
+                "f11.jpg",
+                "shot09.png",
+                "shot9.png",
+                "shot10.png"
+            ]
+        );
     }
 
     #[test]
