@@ -57,8 +57,16 @@ pub fn copy_atomic(from: &Path, to: &Path) -> std::io::Result<()> {
     })
 }
 
+/// Whether `name` is a temporary file of a killed write: ours
+/// ([`TEMP_PREFIX`]) or the measurement report's (`.NAME.PID.N.tmp`).
+pub fn is_temp_name(name: &str) -> bool {
+    name.starts_with(TEMP_PREFIX) || (name.starts_with('.') && name.ends_with(".tmp"))
+}
+
 /// Removes temporary files left in `dir` by a killed run; returns how many.
-pub fn remove_stale_temps(dir: &Path) -> std::io::Result<usize> {
+/// `owned`: the batch owns the folder (the shots folder), so the report's
+/// temporaries go too; otherwise only files with [`TEMP_PREFIX`].
+pub fn remove_stale_temps(dir: &Path, owned: bool) -> std::io::Result<usize> {
     let mut n = 0;
     let entries = match fs::read_dir(dir) {
         Ok(e) => e,
@@ -67,9 +75,13 @@ pub fn remove_stale_temps(dir: &Path) -> std::io::Result<usize> {
     };
     for entry in entries {
         let entry = entry?;
-        if entry.file_name().to_string_lossy().starts_with(TEMP_PREFIX)
-            && entry.file_type()?.is_file()
-        {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let temp = if owned {
+            is_temp_name(&name)
+        } else {
+            name.starts_with(TEMP_PREFIX)
+        };
+        if temp && entry.file_type()?.is_file() {
             fs::remove_file(entry.path())?;
             n += 1;
         }
@@ -110,8 +122,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         fs::write(dir.path().join(format!("{TEMP_PREFIX}1-0-x.csv")), b"x").unwrap();
         fs::write(dir.path().join("x.csv"), b"x").unwrap();
+        fs::write(dir.path().join(".x.csv.123.abc.tmp"), b"x").unwrap();
         fs::write(dir.path().join(".hidden"), b"x").unwrap();
-        assert_eq!(remove_stale_temps(dir.path()).unwrap(), 1);
+        assert_eq!(remove_stale_temps(dir.path(), false).unwrap(), 1);
+        fs::write(dir.path().join(format!("{TEMP_PREFIX}1-0-x.csv")), b"x").unwrap();
+        assert_eq!(remove_stale_temps(dir.path(), true).unwrap(), 2);
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 }

@@ -163,7 +163,7 @@ pub fn run_batch(
     progress: &dyn Progress,
 ) -> Result<BatchOutcome, BatchError> {
     std::fs::create_dir_all(out).map_err(|e| BatchError::output(out, e))?;
-    atomic::remove_stale_temps(out).map_err(|e| BatchError::output(out, e))?;
+    atomic::remove_stale_temps(out, false).map_err(|e| BatchError::output(out, e))?;
     manifest::Manifest::of_run(plan.shard.to_string(), plan.total, &plan.shots).write(out)?;
     let run = runner::run_shots(&plan.shots, &out.join(SHOTS_DIR), job, opts, progress)?;
     let title = if plan.shard.n > 1 {

@@ -111,7 +111,7 @@ pub fn run_shots(
     progress: &dyn Progress,
 ) -> Result<RunOutcome, BatchError> {
     std::fs::create_dir_all(shots_dir).map_err(|e| BatchError::output(shots_dir, e))?;
-    atomic::remove_stale_temps(shots_dir).map_err(|e| BatchError::output(shots_dir, e))?;
+    atomic::remove_stale_temps(shots_dir, true).map_err(|e| BatchError::output(shots_dir, e))?;
 
     let mut records: Vec<Option<ShotRecord>> = vec![None; shots.len()];
     let mut todo = Vec::new();
