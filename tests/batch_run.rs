@@ -205,6 +205,20 @@ fn workers_are_bounded_by_jobs() {
 }
 
 #[test]
+fn nested_parallel_decoding_does_not_start_extra_shots() {
+    // A decoder that parallelises inside (rawler does) must not let a waiting
+    // worker pick up another shot: at most `jobs` shots (decoded images) at once.
+    let d = tempfile::tempdir().unwrap();
+    let shots = d.path().join("shots");
+    good_folder(&shots, 12);
+    let out = d.path().join("out");
+    let mut job = StubJob::new("a", 16);
+    job.nested_rayon = true;
+    run(std::slice::from_ref(&shots), &out, &job, &opts(2));
+    assert_eq!(job.max_running.load(Ordering::SeqCst), 2);
+}
+
+#[test]
 fn same_file_name_in_two_folders_keeps_both() {
     let d = tempfile::tempdir().unwrap();
     let a = d.path().join("a");

@@ -1,9 +1,13 @@
-//! The parallel runner: measures planned shots on a rayon pool of `jobs`
-//! threads. Each worker takes one shot at a time and the job decodes its own
-//! file, so at most `jobs` decoded images are alive at once (no queue of
-//! decoded images). A panic inside a job is caught and becomes that shot's
-//! error row; every other shot is still measured. Complete shots from an
-//! earlier run are skipped (see [`super::resume`]).
+//! The parallel runner: measures planned shots on `jobs` worker threads that
+//! take the next shot from a shared counter. Each worker holds one shot at a
+//! time and the job decodes its own file, so at most `jobs` decoded images
+//! are alive at once (no queue of decoded images). The workers are plain
+//! threads, not rayon workers, on purpose: a decoder that parallelises
+//! inside (rawler does, with rayon) then runs on rayon's global pool, and a
+//! worker waiting for it cannot steal and start a further shot, as a worker
+//! of a rayon pool would. A panic inside a job is caught and becomes that
+//! shot's error row; every other shot is still measured. Complete shots from
+//! an earlier run are skipped (see [`super::resume`]).
 
 use super::progress::Progress;
 use super::record::{FailKind, ShotFailure, ShotRecord, ShotResult, Status};
@@ -136,27 +140,42 @@ pub fn run_shots(
     let skipped = shots.len() - todo.len();
     progress.start(shots.len(), skipped);
 
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.jobs.max(1))
-        .thread_name(|i| format!("{WORKER_THREAD_PREFIX}{i}"))
-        .build()
-        .map_err(|e| {
-            BatchError::Usage(format!("cannot start {} worker threads: {e}", opts.jobs))
-        })?;
+    let next = AtomicUsize::new(0);
     let finished = AtomicUsize::new(0);
     let to_run = todo.len();
-    let done: Vec<(usize, ShotRecord)> = pool.install(|| {
-        use rayon::prelude::*;
-        todo.par_iter()
-            .with_max_len(1)
-            .map(|(i, hash)| {
-                let rec = run_one(&shots[*i], shots_dir, job, hash);
-                let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
-                progress.shot_done(&rec, n, to_run);
-                (*i, rec)
+    let workers = opts.jobs.max(1).min(to_run.max(1));
+    let done: Vec<(usize, ShotRecord)> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..workers)
+            .map(|w| {
+                let (next, finished, todo) = (&next, &finished, &todo);
+                std::thread::Builder::new()
+                    .name(format!("{WORKER_THREAD_PREFIX}{w}"))
+                    .spawn_scoped(scope, move || {
+                        let mut mine = Vec::new();
+                        loop {
+                            let t = next.fetch_add(1, Ordering::SeqCst);
+                            let Some((i, hash)) = todo.get(t) else { break };
+                            let rec = run_one(&shots[*i], shots_dir, job, hash);
+                            let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
+                            progress.shot_done(&rec, n, to_run);
+                            mine.push((*i, rec));
+                        }
+                        mine
+                    })
             })
-            .collect()
-    });
+            .collect::<Result<_, _>>()
+            .map_err(|e| {
+                BatchError::Usage(format!("cannot start {workers} worker threads: {e}"))
+            })?;
+        // A worker never panics (jobs run under catch_unwind); if one did, its
+        // shots are reported below as missing records, not lost silently.
+        Ok::<_, BatchError>(
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().unwrap_or_default())
+                .collect(),
+        )
+    })?;
     for (i, rec) in done {
         records[i] = Some(rec);
     }

@@ -43,6 +43,8 @@ pub struct StubJob {
     pub max_running: AtomicUsize,
     /// Jobs started in total.
     pub started: AtomicUsize,
+    /// Decode "in parallel" inside the job with rayon, as rawler does.
+    pub nested_rayon: bool,
 }
 
 impl StubJob {
@@ -62,7 +64,16 @@ impl StubJob {
         let img = image::open(source)
             .map_err(|e| ShotFailure::new(FailKind::Input, format!("cannot decode: {e}")))?
             .to_luma8();
-        if !self.sleep.is_zero() {
+        if self.nested_rayon {
+            use rayon::prelude::*;
+            // Uneven parts: a worker that finishes its part early waits for
+            // (and, in a rayon pool, steals work during) the long one.
+            let step = self.sleep / 4;
+            (0..4)
+                .into_par_iter()
+                .with_max_len(1)
+                .for_each(|i| std::thread::sleep(step * if i % 2 == 0 { 1 } else { 3 }));
+        } else if !self.sleep.is_zero() {
             std::thread::sleep(self.sleep);
         }
         let g = img.get_pixel(0, 0).0[0];
