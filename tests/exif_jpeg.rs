@@ -50,6 +50,13 @@ fn sx60_gives_the_focal_plane_pitch() {
     );
     assert_eq!(specs[1].0, "aperture");
     assert!(specs[1].1.starts_with("rect:A=3.0137696"), "{}", specs[1].1);
+    // the model's own parser takes the aperture spec: a square pixel of the
+    // pitch has MTF |sinc(1/2)| = 2/π at the Nyquist frequency 1/(2·pitch)
+    let spec = specs[1].1.trim_start_matches("rect:");
+    let aperture = sweepmtf::model::aperture::parse(&format!("rect:{spec}")).unwrap();
+    let nyquist = 1.0 / (2.0 * want);
+    let mtf = aperture.otf(nyquist, 0.0).norm();
+    assert!((mtf - 2.0 / std::f64::consts::PI).abs() < 1e-9, "{mtf}");
 }
 
 #[test]

@@ -131,7 +131,12 @@ fn map_error(path: &Path, e: RawlerError, facts: &ExifFacts) -> RawError {
 }
 
 /// Facts from rawler's metadata, filled in from the TIFF EXIF where kamadak-exif can read it.
-fn facts_of(meta: Option<&RawMetadata>, bytes: &[u8], make: &str, model: &str) -> ExifFacts {
+fn facts_of(
+    meta: Option<&RawMetadata>,
+    tiff: Option<ExifFacts>,
+    make: &str,
+    model: &str,
+) -> ExifFacts {
     let mut f = ExifFacts {
         from_raw: true,
         make: clean_text(make),
@@ -159,7 +164,7 @@ fn facts_of(meta: Option<&RawMetadata>, bytes: &[u8], make: &str, model: &str) -
                 .or(e.recommended_exposure_index),
         );
     }
-    if let Some(tiff) = try_facts_from_bytes(bytes) {
+    if let Some(tiff) = tiff {
         f.fill_from(tiff);
     }
     // rawler's cleaned-up names only where the file itself names nothing.
@@ -191,11 +196,14 @@ pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
         let decoder = rawler::get_decoder(&src)?;
         decoder.raw_metadata(&src, &RawDecodeParams::default())
     });
+    let tiff = guard::contain(|| try_facts_from_bytes(src.buf()))
+        .ok()
+        .flatten();
     match outcome {
-        Ok(Ok(meta)) => Ok(facts_of(Some(&meta), src.buf(), "", "")),
+        Ok(Ok(meta)) => Ok(facts_of(Some(&meta), tiff, "", "")),
         // No rawler metadata: fall back on the TIFF EXIF alone.
         Ok(Err(_)) | Err(_) => {
-            let mut f = facts_of(None, src.buf(), "", "");
+            let mut f = facts_of(None, tiff, "", "");
             f.warnings
                 .push("the raw decoder could not read this file's metadata".to_string());
             Ok(f)
@@ -207,6 +215,11 @@ pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
 /// with its EXIF facts. No demosaicing and no colour processing.
 pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
     let src = open(path)?;
+    // The TIFF EXIF copy is read and freed before the image buffer exists,
+    // so the two never add up in the peak memory.
+    let tiff = guard::contain(|| try_facts_from_bytes(src.buf()))
+        .ok()
+        .flatten();
     let outcome = guard::contain(|| {
         let decoder = rawler::get_decoder(&src)?;
         let params = RawDecodeParams::default();
@@ -218,8 +231,7 @@ pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
     let (image, meta, format) = match outcome {
         Ok(Ok(parts)) => parts,
         Ok(Err(e)) => {
-            let facts = try_facts_from_bytes(src.buf()).unwrap_or_default();
-            return Err(map_error(path, e, &facts));
+            return Err(map_error(path, e, &tiff.unwrap_or_default()));
         }
         Err(message) => {
             return Err(RawError::DecoderPanic {
@@ -228,7 +240,7 @@ pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
             });
         }
     };
-    let facts = facts_of(meta.as_ref(), src.buf(), &image.make, &image.model);
+    let facts = facts_of(meta.as_ref(), tiff, &image.make, &image.model);
     drop(src);
     let path_text = path.display().to_string();
     frame_from_image(image, format, facts).map_err(|e| match e {
