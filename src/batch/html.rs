@@ -83,7 +83,7 @@ figcaption{{font-size:13px;color:#555;}}\n\
 table{{border-collapse:collapse;font-size:13px;}}\n\
 th,td{{border:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap;}}\n\
 th{{background:#f2f2f2;position:sticky;top:0;}}\n\
-td.l{{text-align:left;}} tr.err td{{background:#fdecea;}} td.e{{text-align:left;white-space:normal;color:#a00;}}\n\
+td.l,th.l{{text-align:left;}} tr.err td{{background:#fdecea;}} td.e{{text-align:left;white-space:normal;color:#a00;}}\n\
 .bad{{color:#a00;font-weight:bold;}}\n\
 </style>\n</head>\n<body>\n<h1>{t}</h1>\n<p class=\"meta\">{n} shot{s}: {ok} measured, <span class=\"{cls}\">{failed} failed</span>.</p>\n",
         t = escape(title),
@@ -104,10 +104,10 @@ td.l{{text-align:left;}} tr.err td{{background:#fdecea;}} td.e{{text-align:left;
         h.push_str("</div>\n");
     }
     h.push_str(
-        "<table>\n<thead><tr><th>#</th><th>file</th><th>status</th>\
+        "<table>\n<thead><tr><th>#</th><th class=\"l\">file</th><th class=\"l\">status</th>\
 <th>MTF50<br>cy/px</th><th>MTF50<br>cy/mm</th><th>MTF50<br>LW/PH</th><th>MTF10<br>cy/px</th>\
-<th>MTF at<br>Nyquist</th><th>method</th><th>f-number</th><th>focal<br>length</th><th>ISO</th>\
-<th>exposure</th><th>camera</th><th>lens</th><th>time<br>s</th><th>error / warnings</th></tr></thead>\n<tbody>\n",
+<th>MTF at<br>Nyquist</th><th class=\"l\">method</th><th>f-number</th><th>focal<br>length</th><th>ISO</th>\
+<th>exposure</th><th class=\"l\">camera</th><th class=\"l\">lens</th><th>time<br>s</th><th class=\"l\">error / warnings</th></tr></thead>\n<tbody>\n",
     );
     for (i, r) in records.iter().enumerate() {
         let x = &r.result;
