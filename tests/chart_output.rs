@@ -747,3 +747,65 @@ fn unreadable_description_is_reported() {
     std::fs::write(&p, "name = 3").unwrap();
     assert!(matches!(Target::load(&p), Err(TargetError::Parse { .. })));
 }
+
+#[test]
+fn gamma_encoding_gives_requested_modulation() {
+    let dir = tempfile::tempdir().unwrap();
+    let (png, t) = make(
+        dir.path(),
+        "g.png",
+        &[
+            "--law",
+            "patches",
+            "--f-min",
+            "0.3",
+            "--f-max",
+            "1",
+            "--patches",
+            "4",
+            "--dpi",
+            "150",
+            "--gamma",
+            "2.2",
+            "--contrast",
+            "0.5",
+        ],
+    );
+    let img = load_luma16(&png);
+    let pitch = 25.4 / DPI;
+    let refl = |i: usize, j: u32| (img.get_pixel(i as u32, j)[0] as f64 / 65535.0).powf(2.2);
+    for g in &t.greys {
+        let (i, j) = (
+            ((g.rect.x_mm + g.rect.width_mm / 2.0) / pitch) as usize,
+            ((g.rect.y_mm + g.rect.height_mm / 2.0) / pitch) as u32,
+        );
+        assert!((refl(i, j) - g.reflectance).abs() < 1e-4, "{}", g.id);
+    }
+    for p in &t.patches {
+        let j = ((p.rect.y_mm + p.rect.height_mm / 2.0) / pitch) as u32;
+        let i0 = (p.rect.x_mm / pitch).ceil() as usize;
+        let i1 = ((p.rect.x_mm + p.rect.width_mm) / pitch - 1.0).floor() as usize;
+        let mut m = [[0.0f64; 4]; 3];
+        for i in i0..i1 {
+            let ph = 2.0
+                * std::f64::consts::PI
+                * p.freq_cy_mm
+                * ((i as f64 + 0.5) * pitch - p.rect.x_mm);
+            let b = [1.0, ph.cos(), ph.sin()];
+            for u in 0..3 {
+                for w in 0..3 {
+                    m[u][w] += b[u] * b[w];
+                }
+                m[u][3] += b[u] * refl(i, j);
+            }
+        }
+        let s = solve3(m);
+        let modulation = s[1].hypot(s[2]) / s[0];
+        assert!(
+            (modulation / 0.5 - 1.0).abs() < 0.005,
+            "{}: {modulation}",
+            p.id
+        );
+        assert!((s[0] - 0.5).abs() < 0.0025);
+    }
+}

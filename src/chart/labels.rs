@@ -87,7 +87,8 @@ impl TextLabel {
         let size_px = self.height_mm * px_per_mm;
         let font = (crate::plot::FONT, size_px).into_font();
         let (tw, th) = font.box_size(&self.text).ok()?;
-        let pad = 2usize;
+        // Generous padding: glyphs may reach beyond the font's reported box.
+        let pad = (0.4 * size_px).ceil().max(2.0) as usize;
         let (bw, bh) = (tw as usize + 2 * pad, th as usize + 2 * pad);
         let r = self.rect();
         let x0 = (r.x_mm * px_per_mm).round() as i64 - pad as i64;

@@ -242,22 +242,44 @@ struct Builder {
 
 impl Builder {
     /// Places tick marks and numbers under a sweep (x positions from the sweep law).
-    fn sweep_ticks(&mut self, sw: &Sweep, law: Law, band_y: f64, th: f64, caption: &str, w: f64) {
+    #[allow(clippy::too_many_arguments)]
+    fn sweep_ticks(
+        &mut self,
+        sw: &Sweep,
+        law: Law,
+        band_y: f64,
+        th: f64,
+        caption: &str,
+        caption_above: bool,
+        w: f64,
+    ) {
         let tick_w = 0.3f64.max(th * 0.08);
         let tick_len = 0.6 * th;
         let num_y = band_y + tick_len + 0.15 * th;
-        // The caption sits right-aligned at the sweep's end.
-        let cap = TextLabel {
-            text: caption.to_string(),
-            x_mm: sw.rect.x_mm + sw.rect.width_mm,
-            y_mm: num_y,
-            height_mm: th,
-            align: Align::Right,
-        };
         let mut taken: Vec<(f64, f64)> = vec![];
-        let cr = cap.rect();
-        taken.push((cr.x_mm, cr.x_mm + cr.width_mm));
-        self.texts.push(cap);
+        if caption_above {
+            // In the free gap above the strip, left-aligned.
+            let h = text_size_mm(caption, th).1;
+            self.texts.push(TextLabel {
+                text: caption.to_string(),
+                x_mm: sw.rect.x_mm,
+                y_mm: sw.rect.y_mm - 0.25 * th - h,
+                height_mm: th,
+                align: Align::Left,
+            });
+        } else {
+            // Right-aligned at the sweep's end, among the numbers.
+            let cap = TextLabel {
+                text: caption.to_string(),
+                x_mm: sw.rect.x_mm + sw.rect.width_mm,
+                y_mm: num_y,
+                height_mm: th,
+                align: Align::Right,
+            };
+            let cr = cap.rect();
+            taken.push((cr.x_mm, cr.x_mm + cr.width_mm));
+            self.texts.push(cap);
+        }
         let sep = 0.6 * th;
         let mut n = 0;
         for f in tick_candidates(law, sw.f_min_cy_mm, sw.f_max_cy_mm) {
@@ -319,7 +341,13 @@ pub fn layout(spec: &ChartSpec) -> Result<Chart, ChartError> {
     let n_rows = spec.contrasts.len() * per_contrast;
     let grey_h = (0.1 * h).clamp(4.0, 30.0);
     let min_gap = (0.01 * h).max(1.0);
-    let fixed = grey_h + grey_label_band + n_rows as f64 * band + n_rows as f64 * min_gap;
+    // Sweeps carry a caption line above the strip (patches caption their first label).
+    let cap_h = if spec.law == Law::Patches {
+        0.0
+    } else {
+        text_h + 0.5 * th
+    };
+    let fixed = grey_h + grey_label_band + n_rows as f64 * (band + cap_h + min_gap);
     let avail = bottom - top - fixed;
     let sh = (avail / n_rows as f64).min(0.3 * h);
     if sh < 3.0 || w - 2.0 * mx < 20.0 {
@@ -372,6 +400,7 @@ pub fn layout(spec: &ChartSpec) -> Result<Chart, ChartError> {
     for (ci, &c) in spec.contrasts.iter().enumerate() {
         match spec.law {
             Law::Log | Law::Linear => {
+                y += cap_h;
                 let sw = Sweep {
                     id: cid(ci, c),
                     rect: Rect {
@@ -391,8 +420,8 @@ pub fn layout(spec: &ChartSpec) -> Result<Chart, ChartError> {
                     mean: spec.mean,
                     contrast: c,
                 };
-                let caption = format!("lp/mm, contrast {c}");
-                b.sweep_ticks(&sw, spec.law, y + sh + 0.4 * th, th, &caption, w);
+                let caption = format!("contrast {c}, frequency in lp/mm");
+                b.sweep_ticks(&sw, spec.law, y + sh + 0.4 * th, th, &caption, true, w);
                 target.sweeps.push(sw);
                 y += sh + band + gap;
             }
@@ -586,6 +615,56 @@ mod tests {
             }
         }
         assert!(c.ticks.len() >= 4);
+    }
+
+    #[test]
+    fn marks_stay_on_background_for_many_layouts() {
+        // Every label box and tick (sampled on a grid) lies inside the page, on
+        // background, and outside every fiducial's keep-out square.
+        for (w, h) in [
+            (297.0, 210.0),
+            (420.0, 297.0),
+            (210.0, 148.0),
+            (120.0, 80.0),
+            (600.0, 200.0),
+        ] {
+            for law in [Law::Log, Law::Linear, Law::Patches] {
+                for contrasts in [vec![0.8], vec![0.8, 0.4, 0.2]] {
+                    let mut s = ChartSpec::new(law, 0.3, 4.0);
+                    s.width_mm = w;
+                    s.height_mm = h;
+                    s.contrasts = contrasts;
+                    let c = layout(&s).unwrap();
+                    let t = &c.target;
+                    let rects = c
+                        .texts
+                        .iter()
+                        .map(|l| l.rect())
+                        .chain(c.ticks.iter().copied());
+                    for r in rects {
+                        for a in 0..=8 {
+                            for b in 0..=4 {
+                                let x = r.x_mm + r.width_mm * a as f64 / 8.0;
+                                let y = r.y_mm + r.height_mm * b as f64 / 4.0;
+                                assert!(
+                                    x >= 0.0 && x <= w && y >= 0.0 && y <= h,
+                                    "{w}×{h} {law:?}"
+                                );
+                                assert_eq!(t.reflectance(x, y), 1.0, "{w}×{h} {law:?} at {x},{y}");
+                                for f in &t.fiducials {
+                                    let d = f.diameter_mm;
+                                    assert!(
+                                        (x - f.x_mm).abs() >= d || (y - f.y_mm).abs() >= d,
+                                        "{w}×{h} {law:?}: mark at {x},{y} near {}",
+                                        f.id
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

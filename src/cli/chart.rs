@@ -320,3 +320,26 @@ fn write_all(
     }
     result
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes() {
+        assert_eq!(parse_size("A4").unwrap(), (297.0, 210.0));
+        assert_eq!(parse_size("a3").unwrap(), (420.0, 297.0));
+        assert_eq!(parse_size("400x300mm").unwrap(), (400.0, 300.0));
+        let (w, h) = parse_size("10x8in").unwrap();
+        assert!((w - 254.0).abs() < 1e-9 && (h - 203.2).abs() < 1e-9);
+        assert!(parse_size("400x300").is_err());
+        assert!(parse_size("B5").is_err());
+    }
+
+    #[test]
+    fn side_files() {
+        let (t, p) = side_paths(Path::new("out/chart.v2.pdf"));
+        assert_eq!(t, Path::new("out/chart.v2.toml"));
+        assert_eq!(p, Path::new("out/chart.v2.preview.png"));
+    }
+}

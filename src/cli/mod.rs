@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 mod batch;
 mod chart;
 mod exit;
+mod factors;
 mod measure;
 mod model;
 mod simulate;

@@ -6,9 +6,17 @@
 //! axes: x right, y up; OTF = (1/Area)∬p(x,y)·exp(−j2π(ux+vy)) dx dy.
 
 pub mod aperture;
+pub mod cte;
+pub mod diffusion;
+pub mod gaussian;
+pub mod olpf;
+pub mod optics;
 pub mod params;
 pub mod sampling;
+pub mod spec;
 pub mod special;
+pub mod system_file;
+pub mod trig;
 
 use num_complex::Complex64;
 use thiserror::Error;

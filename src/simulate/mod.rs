@@ -1,1 +1,332 @@
-//! Camera simulator: renders a target through a modelled camera and writes the exact truth.
+//! Camera simulator: renders a target description through a modelled camera
+//! and writes the exact truth beside the photo.
+//!
+//! [`render`] places the chart in the frame ([`placement`]), renders the
+//! chart's reflectance through the system OTF and the pixel aperture
+//! ([`render`](mod@render)), applies exposure, illumination fall-off and sensor
+//! noise ([`noise`]), and computes the truth ([`truth`]); [`write_shot`] encodes
+//! the photo ([`encode`]) and writes `STEM.truth.csv` and `STEM.json` beside
+//! it, atomically. [`quick_shot`] makes a small noiseless shot for tests.
+//!
+//! Which OTF is applied: every system factor except sampling-grid factors (a
+//! factor that defines a Nyquist frequency and is not named an aperture: the
+//! simulator samples for real, so the statistical sampling MTF would count
+//! twice), times a 100 % fill-factor square pixel aperture
+//! sinc(pitch·u)·sinc(pitch·v) unless the system already holds an aperture
+//! factor (see [`PixelAperture`]). The truth is |that OTF| at the image's local
+//! frequency vector along the sweep.
+
+pub mod camera;
+pub mod demo;
+pub mod encode;
+pub mod noise;
+pub mod placement;
+pub mod render;
+pub mod truth;
+
+pub use camera::{BayerOrder, Camera, Encoding, PixelAperture, RenderSettings};
+pub use encode::PhotoFormat;
+pub use truth::{PatchTruth, SweepTruth, TruthRow};
+
+use crate::geometry::{Homography, rect_corners};
+use crate::model::System;
+use crate::target::{Target, TargetError};
+use rayon::prelude::*;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a shot could not be simulated or written.
+#[derive(Debug, Error)]
+pub enum SimError {
+    /// A camera setting is out of range.
+    #[error("{0}")]
+    Parameter(String),
+    /// The chart cannot be placed as asked (outside the frame, behind the camera).
+    #[error("{0}")]
+    Placement(String),
+    /// The target description is invalid.
+    #[error(transparent)]
+    Target(#[from] TargetError),
+    /// Encoding the photo failed.
+    #[error("cannot encode the photo: {0}")]
+    Encode(String),
+    /// Writing an output file failed.
+    #[error("{path}: cannot write: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A bug.
+    #[error("internal error: {0}")]
+    Internal(String),
+}
+
+/// A simulated shot: the linear images, the placement and the truth.
+#[derive(Debug, Clone)]
+pub struct Shot {
+    /// The settings it was made with.
+    pub camera: Camera,
+    /// Image width, pixels.
+    pub width: usize,
+    /// Image height, pixels.
+    pub height: usize,
+    /// Noiseless, unclipped linear signal (1.0 = clipping), row-major; for a
+    /// mosaic, with the photosites' colour gains applied.
+    pub signal: Vec<f32>,
+    /// The recorded linear image: signal with noise, clipped to [0, 1]; what is encoded.
+    pub linear: Vec<f32>,
+    /// Chart (mm) → image (px).
+    pub chart_to_image: Homography,
+    /// The target frame's corners (0,0),(w,0),(w,h),(0,h) in image pixels.
+    pub target_corners: [f64; 8],
+    /// The target's name.
+    pub target_name: String,
+    /// Truth of every sweep (the first is the shot's `roi`).
+    pub sweeps: Vec<SweepTruth>,
+    /// Truth of every sine patch.
+    pub patches: Vec<PatchTruth>,
+    /// Names of the OTF factors applied ("pixel" = the square pixel aperture).
+    pub factors_applied: Vec<String>,
+    /// Names of system factors skipped (sampling-grid factors).
+    pub factors_skipped: Vec<String>,
+    /// Things a user should know (e.g. sweep content above the renderer's band).
+    pub warnings: Vec<String>,
+}
+
+impl Shot {
+    /// The first sweep's strip corners in pixels (corners 1 and 4 on its low-frequency edge).
+    pub fn roi(&self) -> Option<[f64; 8]> {
+        self.sweeps.first().map(|s| s.roi)
+    }
+
+    /// The first sweep's truth curve.
+    pub fn truth(&self) -> Option<&SweepTruth> {
+        self.sweeps.first()
+    }
+
+    /// The photo encoded in `format`.
+    pub fn encode(&self, format: PhotoFormat) -> Result<Vec<u8>, SimError> {
+        encode::encode(&self.camera, &self.linear, format)
+    }
+
+    /// The settings and geometry as the `STEM.json` document (`photo`: the photo's file name).
+    pub fn settings_json(&self, photo: &str) -> serde_json::Value {
+        let c = &self.camera;
+        json!({
+            "photo": photo,
+            "width_px": self.width,
+            "height_px": self.height,
+            "pixel_pitch_um": c.pixel_pitch_um,
+            "target": self.target_name,
+            "roi": self.roi(),
+            "roi_sweep": self.sweeps.first().map(|s| s.id.clone()),
+            "target_corners": self.target_corners,
+            "homography_chart_to_image": self.chart_to_image.m,
+            "chart_modulation": self.sweeps.first().map(|s| s.chart_contrast),
+            "bayer": c.bayer.map(|b| b.to_string()),
+            "encoding": c.stored_encoding().to_string(),
+            "bits": c.stored_bits(),
+            "factors_applied": self.factors_applied,
+            "factors_skipped": self.factors_skipped,
+            "sweeps": self.sweeps.iter().map(|s| json!({
+                "id": s.id,
+                "roi": s.roi,
+                "chart_contrast": s.chart_contrast,
+                "truth_csv": truth_csv_name(photo, s, &self.sweeps),
+                "freq_cy_px_start": s.rows.first().map(|r| r.freq_cy_px),
+                "freq_cy_px_end": s.rows.last().map(|r| r.freq_cy_px),
+            })).collect::<Vec<_>>(),
+            "patches": self.patches,
+            "warnings": self.warnings,
+            "camera": c,
+        })
+    }
+}
+
+/// File name of a sweep's truth CSV: `STEM.truth.csv` for the first, `STEM.truth.ID.csv` for others.
+fn truth_csv_name(photo: &str, s: &SweepTruth, all: &[SweepTruth]) -> String {
+    let stem = Path::new(photo)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if all.first().is_some_and(|f| std::ptr::eq(f, s)) {
+        format!("{stem}.truth.csv")
+    } else {
+        format!("{stem}.truth.{}.csv", s.id)
+    }
+}
+
+/// Photographs `target` through `system` with `camera`: placement, optics, exposure, noise, truth.
+pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot, SimError> {
+    camera.validate()?;
+    target.validate()?;
+    let placement = placement::place(camera, target)?;
+    let optics = render::Optics::new(system, camera);
+    let (w, h) = (camera.width_px, camera.height_px);
+    let mut signal = render::render_reflectance(target, placement.image_to_chart, &optics, camera)?;
+    // Exposure, illumination fall-off (applied at the pixel: it varies slowly), mosaic gains.
+    let r_corner2 = (w as f64 / 2.0).powi(2) + (h as f64 / 2.0).powi(2);
+    signal.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let dy = y as f64 + 0.5 - h as f64 / 2.0;
+        for (x, v) in row.iter_mut().enumerate() {
+            let dx = x as f64 + 0.5 - w as f64 / 2.0;
+            let mut g = camera.exposure * (1.0 - camera.falloff * (dx * dx + dy * dy) / r_corner2);
+            if let Some(order) = camera.bayer {
+                g *= camera.bayer_gains[order.colour_at(x, y)];
+            }
+            *v = (*v as f64 * g) as f32;
+        }
+    });
+    let model = noise::NoiseModel {
+        full_well_e: camera.full_well_e,
+        read_noise_e: camera.read_noise_e,
+        fpn: camera.fpn,
+        fpn_seed: camera.fpn_seed,
+        seed: camera.seed,
+    };
+    let linear = noise::apply(&model, &signal, w);
+    let (sweeps, patches) = truth::truths(target, &placement.chart_to_image, &optics);
+    let mut warnings = Vec::new();
+    let band = camera.render.oversample as f64 / 2.0;
+    for s in &sweeps {
+        let fmax = s.rows.iter().map(|r| r.freq_cy_px).fold(0.0, f64::max);
+        if fmax > band {
+            warnings.push(format!(
+                "sweep '{}' reaches {fmax:.2} cy/px, above the renderer's band ({band} cy/px at {}× oversampling): content there is aliased",
+                s.id, camera.render.oversample
+            ));
+        }
+    }
+    let clipped = signal.iter().filter(|&&v| v >= 1.0).count();
+    if clipped > 0 {
+        warnings.push(format!(
+            "{:.2} % of the pixels clip (exposure {})",
+            100.0 * clipped as f64 / signal.len() as f64,
+            camera.exposure
+        ));
+    }
+    Ok(Shot {
+        camera: camera.clone(),
+        width: w,
+        height: h,
+        signal,
+        linear,
+        chart_to_image: placement.chart_to_image,
+        target_corners: truth::quad_px(
+            &placement.chart_to_image,
+            rect_corners(0.0, 0.0, target.width_mm, target.height_mm),
+        ),
+        target_name: target.name.clone(),
+        sweeps,
+        patches,
+        factors_applied: optics.applied(),
+        factors_skipped: optics.skipped(),
+        warnings,
+    })
+}
+
+/// A small noiseless linear 16-bit shot of `target` through `system`, `width`×`height` px,
+/// rotated by `rotate_deg` (counter-clockwise), for tests of other modules.
+pub fn quick_shot(
+    target: &Target,
+    system: &System,
+    width: usize,
+    height: usize,
+    rotate_deg: f64,
+) -> Result<Shot, SimError> {
+    let camera = Camera {
+        rotate_deg,
+        ..Camera::noiseless(width, height)
+    };
+    render(target, system, &camera)
+}
+
+/// The paths `write_shot` writes for photo `path`: the photo, `STEM.truth.csv`, `STEM.json`.
+pub fn output_paths(path: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    let stem = path.with_extension("");
+    let with = |suffix: &str| {
+        let mut s = stem.clone().into_os_string();
+        s.push(suffix);
+        PathBuf::from(s)
+    };
+    (path.to_path_buf(), with(".truth.csv"), with(".json"))
+}
+
+/// Writes bytes to `path` atomically (a temporary file in the same folder, then a rename).
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SimError> {
+    let io = |source| SimError::Io {
+        path: path.display().to_string(),
+        source,
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .ok_or_else(|| io(std::io::Error::other("not a file name")))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    std::fs::write(&tmp, bytes).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })
+}
+
+/// Checks that `camera`'s encoding can be written under the name `path` (before rendering).
+pub fn check_output(camera: &Camera, path: &Path) -> Result<PhotoFormat, SimError> {
+    let format = PhotoFormat::from_path(path)?;
+    let shown = path.display();
+    match format {
+        PhotoFormat::Jpeg if camera.bayer.is_some() => Err(SimError::Parameter(format!(
+            "{shown}: a Bayer mosaic is written as 16-bit linear PNG or TIFF, not JPEG"
+        ))),
+        PhotoFormat::Jpeg if camera.bits != 8 => Err(SimError::Parameter(format!(
+            "{shown}: JPEG stores 8 bits; use --bits 8 or a .png/.tif name"
+        ))),
+        PhotoFormat::Png | PhotoFormat::Tiff if camera.jpeg_quality.is_some() => {
+            Err(SimError::Parameter(format!(
+                "{shown}: a JPEG quality was given but the name does not end in .jpg"
+            )))
+        }
+        f => Ok(f),
+    }
+}
+
+/// Writes the photo to `path` (format from its extension), `STEM.truth.csv`
+/// (first sweep; others as `STEM.truth.ID.csv`) and `STEM.json`, each atomically;
+/// everything is encoded before the first file is written.
+pub fn write_shot(shot: &Shot, path: &Path) -> Result<(), SimError> {
+    check_output(&shot.camera, path)?;
+    let format = PhotoFormat::from_path(path)?;
+    let photo = shot.encode(format)?;
+    let (_, csv_path, json_path) = output_paths(path);
+    let photo_name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut files = vec![(path.to_path_buf(), photo)];
+    for (i, s) in shot.sweeps.iter().enumerate() {
+        let csv = truth::truth_csv(s).map_err(|e| SimError::Internal(e.to_string()))?;
+        let p = if i == 0 {
+            csv_path.clone()
+        } else {
+            path.with_file_name(truth_csv_name(&photo_name, s, &shot.sweeps))
+        };
+        files.push((p, csv));
+    }
+    let json = serde_json::to_vec_pretty(&shot.settings_json(&photo_name))
+        .map_err(|e| SimError::Internal(e.to_string()))?;
+    files.push((json_path, json));
+    for (p, bytes) in &files {
+        write_atomic(p, bytes)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,190 @@
+//! The exact truth of a shot: for every sweep, the presampling MTF the image
+//! should show along the sweep direction, sampled along the strip's centre
+//! line; for every sine patch, its image frequency and MTF.
+//!
+//! A chart phase φ(X) appears in the image as ψ(x) = φ(H⁻¹(x)), so the image's
+//! local frequency vector is ∇ψ = J⁻ᵀ·∇φ, J the homography's Jacobian at the
+//! chart point (image px per chart mm). The MTF is |OTF| at that vector (with
+//! perspective it changes along the strip and is evaluated on the centre line).
+
+use super::render::Optics;
+use crate::geometry::{Homography, Point};
+use crate::target::{Direction, Rect, Target};
+use serde::Serialize;
+
+/// One row of a sweep's truth curve.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TruthRow {
+    /// Image frequency along the sweep, cycles/pixel.
+    pub freq_cy_px: f64,
+    /// Presampling MTF at that frequency vector.
+    pub mtf: f64,
+    /// Distance along the sweep from its low-frequency edge, chart mm.
+    pub s_mm: f64,
+    /// Frequency on the sensor, cycles/mm.
+    pub freq_cy_mm: f64,
+    /// Frequency printed on the chart, cycles/mm of chart.
+    pub chart_freq_cy_mm: f64,
+    /// Image x of the point on the strip's centre line, pixels.
+    pub x_px: f64,
+    /// Image y of the point on the strip's centre line, pixels.
+    pub y_px: f64,
+}
+
+/// The truth of one sweep strip.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepTruth {
+    /// The sweep's id in the target.
+    pub id: String,
+    /// The strip's corners in image pixels, corners 1 and 4 on the low-frequency edge, going round.
+    pub roi: [f64; 8],
+    /// The printed modulation of the sweep.
+    pub chart_contrast: f64,
+    /// The curve, in order of rising `s_mm`.
+    pub rows: Vec<TruthRow>,
+}
+
+/// The truth of one constant-frequency sine patch.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PatchTruth {
+    /// The patch's id in the target.
+    pub id: String,
+    /// The patch's corners in image pixels (its rectangle's corners, going round).
+    pub corners: [f64; 8],
+    /// Image frequency vector at the patch centre, cycles/pixel (x right, y down).
+    pub freq_vec_cy_px: [f64; 2],
+    /// Its length, cycles/pixel.
+    pub freq_cy_px: f64,
+    /// Presampling MTF there.
+    pub mtf: f64,
+    /// The printed modulation.
+    pub chart_contrast: f64,
+    /// The modulation the (noiseless, unclipped) image shows: mtf × chart contrast.
+    pub modulation: f64,
+}
+
+/// The image frequency vector (cy/px, x right, y down) of a chart phase gradient `g` (cy/mm) at chart point `p`.
+pub fn image_freq(h: &Homography, p: Point, g: [f64; 2]) -> [f64; 2] {
+    let j = h.jacobian(p);
+    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    [
+        (j[1][1] * g[0] - j[1][0] * g[1]) / det,
+        (-j[0][1] * g[0] + j[0][0] * g[1]) / det,
+    ]
+}
+
+fn flat(q: [Point; 4]) -> [f64; 8] {
+    [
+        q[0][0], q[0][1], q[1][0], q[1][1], q[2][0], q[2][1], q[3][0], q[3][1],
+    ]
+}
+
+/// A rectangle's corners going round, starting on the edge where `s` = 0 (corners 1 and 4 on it).
+fn strip_corners(r: &Rect, dir: Direction) -> [Point; 4] {
+    let (x0, y0, x1, y1) = (r.x_mm, r.y_mm, r.x_mm + r.width_mm, r.y_mm + r.height_mm);
+    match dir {
+        Direction::X => [[x0, y0], [x1, y0], [x1, y1], [x0, y1]],
+        Direction::Y => [[x1, y0], [x1, y1], [x0, y1], [x0, y0]],
+    }
+}
+
+/// The corners of a chart quadrilateral mapped to image pixels, flattened.
+pub fn quad_px(h: &Homography, q: [Point; 4]) -> [f64; 8] {
+    flat(q.map(|p| h.apply(p)))
+}
+
+/// Truth curves of every sweep in `target` and truths of every sine patch.
+pub fn truths(
+    target: &Target,
+    h: &Homography,
+    optics: &Optics,
+) -> (Vec<SweepTruth>, Vec<PatchTruth>) {
+    let pitch = optics.pitch_mm;
+    let sweeps = target
+        .sweeps
+        .iter()
+        .map(|sw| {
+            let r = sw.rect;
+            let len = sw.length_mm();
+            let a = h.apply(strip_corners(&r, sw.direction)[0]);
+            let b = h.apply(strip_corners(&r, sw.direction)[1]);
+            let n = ((a[0] - b[0]).hypot(a[1] - b[1]).ceil() as usize + 1).clamp(65, 4001);
+            let rows = (0..n)
+                .map(|i| {
+                    let s = len * i as f64 / (n - 1) as f64;
+                    let f = sw.freq_at(s);
+                    let (p, g) = match sw.direction {
+                        Direction::X => ([r.x_mm + s, r.y_mm + r.height_mm / 2.0], [f, 0.0]),
+                        Direction::Y => ([r.x_mm + r.width_mm / 2.0, r.y_mm + s], [0.0, f]),
+                    };
+                    let k = image_freq(h, p, g);
+                    let q = h.apply(p);
+                    let fpx = k[0].hypot(k[1]);
+                    TruthRow {
+                        freq_cy_px: fpx,
+                        mtf: optics.otf_cy_px(k[0], k[1]).norm(),
+                        s_mm: s,
+                        freq_cy_mm: fpx / pitch,
+                        chart_freq_cy_mm: f,
+                        x_px: q[0],
+                        y_px: q[1],
+                    }
+                })
+                .collect();
+            SweepTruth {
+                id: sw.id.clone(),
+                roi: quad_px(h, strip_corners(&r, sw.direction)),
+                chart_contrast: sw.contrast,
+                rows,
+            }
+        })
+        .collect();
+    let patches = target
+        .patches
+        .iter()
+        .map(|p| {
+            let r = p.rect;
+            let c = [r.x_mm + r.width_mm / 2.0, r.y_mm + r.height_mm / 2.0];
+            let g = match p.direction {
+                Direction::X => [p.freq_cy_mm, 0.0],
+                Direction::Y => [0.0, p.freq_cy_mm],
+            };
+            let k = image_freq(h, c, g);
+            let mtf = optics.otf_cy_px(k[0], k[1]).norm();
+            PatchTruth {
+                id: p.id.clone(),
+                corners: quad_px(h, r.corners()),
+                freq_vec_cy_px: k,
+                freq_cy_px: k[0].hypot(k[1]),
+                mtf,
+                chart_contrast: p.contrast,
+                modulation: mtf * p.contrast,
+            }
+        })
+        .collect();
+    (sweeps, patches)
+}
+
+/// A sweep's truth curve as CSV text: `freq_cy_px,mtf,s_mm,freq_cy_mm,chart_freq_cy_mm,x_px,y_px`.
+pub fn truth_csv(t: &SweepTruth) -> Result<Vec<u8>, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in &t.rows {
+        w.serialize(r)?;
+    }
+    w.into_inner().map_err(|e| e.into_error().into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_frequency_of_a_scaled_rotated_chart() {
+        // 4 px/mm, rotated 90° counter-clockwise: chart +x goes to image −y.
+        let src = crate::geometry::rect_corners(0.0, 0.0, 10.0, 10.0);
+        let dst = [[0.0, 40.0], [0.0, 0.0], [40.0, 0.0], [40.0, 40.0]];
+        let h = Homography::from_quads(&src, &dst).unwrap();
+        let k = image_freq(&h, [5.0, 5.0], [1.0, 0.0]);
+        assert!(k[0].abs() < 1e-12 && (k[1] + 0.25).abs() < 1e-12, "{k:?}");
+    }
+}
