@@ -104,11 +104,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             writeln!(
                 rois,
                 "{name},{}",
-                r.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
+                r.iter()
+                    .map(|v| v.to_string())
+                    .collect::<Vec<_>>()
+                    .join(",")
             )?;
             let t = shot.truth().ok_or("truth")?;
             let pts: Vec<(f64, f64)> = t.rows.iter().map(|r| (r.freq_cy_px, r.mtf)).collect();
-            let m50 = crossing(&pts, 0.5).map(|f| f.to_string()).unwrap_or_default();
+            let m50 = crossing(&pts, 0.5)
+                .map(|f| f.to_string())
+                .unwrap_or_default();
             writeln!(truth, "{name},{n},{sigma},{m50}")?;
             eprintln!("{name}: sigma {sigma:.3} px, true MTF50 {m50} cy/px");
         }
