@@ -93,6 +93,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 focal_length: (50, 1),
                 exposure_time: (1, 125),
                 iso: 100,
+                pitch_um_and_size: Some((camera.pixel_pitch_um, w as u32, h as u32)),
             };
             let name = if copies == 1 {
                 format!("f{}.jpg", sweepmtf::batch::plots::fmt_fnumber(n))

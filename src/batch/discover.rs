@@ -37,30 +37,53 @@ fn is_hidden(name: &std::ffi::OsStr) -> bool {
     name.to_string_lossy().starts_with('.')
 }
 
-/// Compares paths the way people count: digit runs by their value
-/// (`f2.8` < `f4` < `f11`, `shot9` < `shot10`), everything else by its
-/// bytes; ties (`01` against `1`) fall back to plain text order, so the
-/// order is total and deterministic.
+/// Compares paths the way people count: numbers by their value, with a
+/// decimal fraction when a `.` sits between digits (`f2` < `f2.8` < `f4` <
+/// `f11`, `shot9` < `shot10`), everything else by its bytes; ties (`01`
+/// against `1`) fall back to plain text order, so the order is total and
+/// deterministic.
 pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
     use std::cmp::Ordering;
+    /// The number starting at `i`: (integer digits without leading zeros,
+    /// fraction digits, end index).
+    fn number(s: &[u8], mut i: usize) -> (&[u8], &[u8], usize) {
+        let start = i;
+        while i < s.len() && s[i].is_ascii_digit() {
+            i += 1;
+        }
+        let mut int = &s[start..i];
+        while int.len() > 1 && int[0] == b'0' {
+            int = &int[1..];
+        }
+        let mut frac: &[u8] = &[];
+        if i + 1 < s.len() && s[i] == b'.' && s[i + 1].is_ascii_digit() {
+            let f0 = i + 1;
+            i = f0;
+            while i < s.len() && s[i].is_ascii_digit() {
+                i += 1;
+            }
+            frac = &s[f0..i];
+        }
+        (int, frac, i)
+    }
     let (ab, bb) = (a.as_bytes(), b.as_bytes());
     let (mut i, mut j) = (0, 0);
     while i < ab.len() && j < bb.len() {
         if ab[i].is_ascii_digit() && bb[j].is_ascii_digit() {
-            let si = i;
-            while i < ab.len() && ab[i].is_ascii_digit() {
-                i += 1;
-            }
-            let sj = j;
-            while j < bb.len() && bb[j].is_ascii_digit() {
-                j += 1;
-            }
-            let na = a[si..i].trim_start_matches('0');
-            let nb = b[sj..j].trim_start_matches('0');
-            let o = na.len().cmp(&nb.len()).then_with(|| na.cmp(nb));
+            let (ia, fa, ni) = number(ab, i);
+            let (ib, fb, nj) = number(bb, j);
+            // Integers by length then digits; fractions digit by digit
+            // (a missing digit counts as 0, so 2 < 2.8 and 2.25 < 2.5).
+            let o = ia
+                .len()
+                .cmp(&ib.len())
+                .then_with(|| ia.cmp(ib))
+                .then_with(|| fa.cmp(fb));
             if o != Ordering::Equal {
                 return o;
             }
+            i = ni;
+            j = nj;
         } else {
             if ab[i] != bb[j] {
                 return ab[i].cmp(&bb[j]);

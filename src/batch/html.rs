@@ -83,7 +83,9 @@ figcaption{{font-size:13px;color:#555;}}\n\
 table{{border-collapse:collapse;font-size:13px;}}\n\
 th,td{{border:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap;}}\n\
 th{{background:#f2f2f2;position:sticky;top:0;}}\n\
-td.l,th.l{{text-align:left;}} tr.err td{{background:#fdecea;}} td.e{{text-align:left;white-space:normal;color:#a00;}}\n\
+td.l,th.l{{text-align:left;}} tr.err td{{background:#fdecea;}}\n\
+td.e{{text-align:left;white-space:normal;color:#a00;min-width:320px;}}\n\
+td.w{{text-align:left;white-space:normal;color:#777;font-size:12px;min-width:320px;}}\n\
 .bad{{color:#a00;font-weight:bold;}}\n\
 </style>\n</head>\n<body>\n<h1>{t}</h1>\n<p class=\"meta\">{n} shot{s}: {ok} measured, <span class=\"{cls}\">{failed} failed</span>.</p>\n",
         t = escape(title),
@@ -138,7 +140,7 @@ td.l,th.l{{text-align:left;}} tr.err td{{background:#fdecea;}} td.e{{text-align:
             "<tr{cls}><td>{n}</td><td class=\"l\">{file}</td><td class=\"l\">{st}</td>\
 <td>{m50}</td><td>{m50mm}</td><td>{m50lw}</td><td>{m10}</td><td>{nyq}</td><td class=\"l\">{method}</td>\
 <td>{fnum}</td><td>{fl}</td><td>{iso}</td><td>{exp}</td><td class=\"l\">{cam}</td><td class=\"l\">{lens}</td>\
-<td>{rt:.2}</td><td class=\"e\">{note}</td></tr>",
+<td>{rt:.2}</td><td class=\"{ncls}\">{note}</td></tr>",
             cls = if r.is_ok() { "" } else { " class=\"err\"" },
             n = i + 1,
             st = r.status.as_str(),
@@ -161,6 +163,7 @@ td.l,th.l{{text-align:left;}} tr.err td{{background:#fdecea;}} td.e{{text-align:
             cam = escape(&camera),
             lens = escape(x.lens.as_deref().unwrap_or("")),
             rt = r.run_time_s,
+            ncls = if r.is_ok() { "w" } else { "e" },
             note = escape(&note),
         );
     }

@@ -307,7 +307,7 @@ pub fn mtf50_f_number_png(records: &[ShotRecord]) -> Result<Option<Vec<u8>>, Str
         let red = RGBColor(214, 39, 40);
         chart
             .draw_series(std::iter::once(Circle::new(
-                (best.0, best.1),
+                (stop(best.0), best.1),
                 8,
                 red.stroke_width(2),
             )))

@@ -15,6 +15,9 @@ pub struct Facts {
     pub focal_length: (u32, u32),
     pub exposure_time: (u32, u32),
     pub iso: u16,
+    /// Sensor pixel pitch in µm (written as FocalPlaneX/YResolution in
+    /// pixels per cm) and the image size it describes; `None` = not written.
+    pub pitch_um_and_size: Option<(f64, u32, u32)>,
 }
 
 struct Entry {
@@ -95,21 +98,39 @@ pub fn with_exif(jpeg: &[u8], f: &Facts) -> Vec<u8> {
     let mut tiff = b"MM\0\x2A".to_vec();
     tiff.extend(8u32.to_be_bytes());
     tiff.extend(ifd(ifd0_entries(exif_at), 8));
-    tiff.extend(ifd(
-        vec![
-            rational(0x829A, f.exposure_time),
-            rational(0x829D, f.f_number),
-            Entry {
-                tag: 0x8827,
-                typ: 3,
-                count: 1,
-                data: f.iso.to_be_bytes().to_vec(),
-            },
-            rational(0x920A, f.focal_length),
-            ascii(0xA434, &f.lens),
-        ],
-        exif_at,
-    ));
+    let mut exif_entries = vec![
+        rational(0x829A, f.exposure_time),
+        rational(0x829D, f.f_number),
+        Entry {
+            tag: 0x8827,
+            typ: 3,
+            count: 1,
+            data: f.iso.to_be_bytes().to_vec(),
+        },
+        rational(0x920A, f.focal_length),
+        ascii(0xA434, &f.lens),
+    ];
+    if let Some((pitch_um, w, h)) = f.pitch_um_and_size {
+        let long = |tag: u16, v: u32| Entry {
+            tag,
+            typ: 4,
+            count: 1,
+            data: v.to_be_bytes().to_vec(),
+        };
+        // Pixels per cm = 1e4 / pitch_um, as a rational with denominator 1000.
+        let res = ((1e7 / pitch_um).round() as u32, 1000);
+        exif_entries.push(long(0xA002, w));
+        exif_entries.push(long(0xA003, h));
+        exif_entries.push(rational(0xA20E, res));
+        exif_entries.push(rational(0xA20F, res));
+        exif_entries.push(Entry {
+            tag: 0xA210,
+            typ: 3,
+            count: 1,
+            data: 3u16.to_be_bytes().to_vec(), // centimetres
+        });
+    }
+    tiff.extend(ifd(exif_entries, exif_at));
     let mut app1 = b"Exif\0\0".to_vec();
     app1.extend(tiff);
     let len = (app1.len() + 2) as u16;
