@@ -3,16 +3,17 @@
 # (each writes STEM.<ext>, STEM.truth.csv and STEM.json). Run from the
 # repository root: sh testdata/regenerate.sh
 set -e
-S="cargo run --release --quiet -- simulate"
-OPT="--optics diffraction:lambda=550nm,fnum=5.6"
+S="${SWEEPMTF:-cargo run --release --quiet --} simulate"
+OPT="--system targets/systems/aps_c_f4.toml"
 
 # Log sweep, 8-bit sRGB JPEG at quality 90, mild shot and read noise (the README's main command).
 $S --target demo:log $OPT --size 1200x800 --full-well 20000 --read-noise 4 --seed 1 \
    --jpeg 90 -o testdata/sweep_log_srgb_q90.jpg
 # Linear sweep, 8-bit sRGB PNG, noiseless.
 $S --target demo:linear $OPT --size 1200x800 -o testdata/sweep_linear_srgb.png
-# Rotated 12° and tilted 25° about the vertical axis, 8-bit sRGB PNG, mild noise.
-$S --target demo:log $OPT --size 1200x800 --chart-px 800 --rotate 12 --tilt 25,y \
+# Rotated 12° and tilted 25° about the vertical axis, 8-bit sRGB PNG, mild noise
+# (4× oversampling: the far end of the sweep reaches 1.2 cy/px).
+$S --target demo:log $OPT --size 1200x800 --rotate 12 --tilt 25,y --oversample 4 \
    --full-well 20000 --read-noise 4 --seed 2 -o testdata/sweep_log_rot12_tilt25.png
 # 16-bit linear Bayer RGGB mosaic (TIFF with CFA tags), mild noise.
 $S --target demo:log $OPT --size 900x600 --bayer RGGB --full-well 20000 --read-noise 4 \

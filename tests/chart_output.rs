@@ -640,6 +640,27 @@ fn bad_input_one_line_exit_code_no_files() {
         let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert!(left.is_empty(), "{args:?} left {left:?}");
     }
+    // A failure after the temporary files exist (the final name is a folder):
+    // exit 6 and the temporary files are gone.
+    std::fs::create_dir(dir.path().join("d.png")).unwrap();
+    let out = run(
+        dir.path(),
+        &[
+            "--f-min", "0.5", "--f-max", "0.8", "--dpi", "100", "-o", "d.png",
+        ],
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(6),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    assert_eq!(names, ["d.png"], "temporary files left behind");
+    std::fs::remove_dir(dir.path().join("d.png")).unwrap();
     // An unwritable existing folder: nothing half-written is left behind.
     let ro = dir.path().join("ro");
     std::fs::create_dir(&ro).unwrap();

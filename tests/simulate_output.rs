@@ -217,3 +217,31 @@ fn photon_noise_spread_matches_the_full_well() {
     assert!((mean - 0.5).abs() < 5e-4, "{mean}");
     assert!((var / want - 1.0).abs() < 0.05, "{var} vs {want}");
 }
+
+#[test]
+fn falloff_and_exposure_scale_the_flat_field() {
+    let t = Target {
+        name: "flat".into(),
+        width_mm: 100.0,
+        height_mm: 100.0,
+        background: 0.5,
+        sweeps: vec![],
+        patches: vec![],
+        greys: vec![],
+        fiducials: vec![],
+    };
+    let cam = Camera {
+        falloff: 0.3,
+        exposure: 0.9,
+        surround: 0.5,
+        ..Camera::noiseless(120, 80)
+    };
+    let shot = simulate::render(&t, &perfect(), &cam).unwrap();
+    let rc2 = 60.0f64 * 60.0 + 40.0 * 40.0;
+    for (x, y) in [(0usize, 0usize), (59, 39), (119, 79), (30, 70)] {
+        let (dx, dy) = (x as f64 + 0.5 - 60.0, y as f64 + 0.5 - 40.0);
+        let want = 0.9 * 0.5 * (1.0 - 0.3 * (dx * dx + dy * dy) / rc2);
+        let got = shot.linear[y * 120 + x] as f64;
+        assert!((got - want).abs() < 1e-5, "({x},{y}): {got} vs {want}");
+    }
+}

@@ -85,11 +85,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     if args.cut.is_some() || args.map {
         f_max(args)?;
     }
-    if args.cut.is_some() && args.points < 2 {
-        return Err(CliError::usage("--points must be at least 2"));
+    if args.cut.is_some() && !(2..=10_000_000).contains(&args.points) {
+        return Err(CliError::usage("--points must be between 2 and 10000000"));
     }
-    if args.map && !(2..=8192).contains(&args.size) {
-        return Err(CliError::usage("--size must be between 2 and 8192"));
+    if args.map && !(2..=4096).contains(&args.size) {
+        return Err(CliError::usage("--size must be between 2 and 4096"));
     }
     if args.map
         && output

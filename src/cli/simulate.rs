@@ -3,6 +3,7 @@
 //! `simulate` module). Bad settings exit 2, an unreadable target or system
 //! file 3, an unwritable output 6.
 
+use super::factors::FactorArgs;
 use super::{CliError, Code};
 use std::path::PathBuf;
 use sweepmtf::model::System;
@@ -19,9 +20,9 @@ pub struct Args {
     /// `demo:linear` for the built-in demo target.
     #[arg(long, value_name = "FILE")]
     pub target: String,
-    /// Pixel pitch with a unit (e.g. 4.3um).
-    #[arg(long, value_name = "LENGTH", default_value = "4.3um")]
-    pub pixel_pitch: String,
+    /// Pixel pitch with a unit (e.g. 4.3um); default: the system's sampling grid, else 4.3um.
+    #[arg(long, value_name = "LENGTH")]
+    pub pixel_pitch: Option<String>,
     /// Image size in pixels, WxH.
     #[arg(long, value_name = "WxH", default_value = "1200x800")]
     pub size: String,
@@ -110,6 +111,9 @@ pub struct Args {
     /// Renderer: tile overlap, pixels.
     #[arg(long, value_name = "PX", default_value_t = RenderSettings::default().margin_px)]
     pub margin: usize,
+    /// The model system: `--system FILE` and/or factor flags (none: a perfect lens).
+    #[command(flatten)]
+    pub factors: FactorArgs,
     /// The photo to write: .png, .jpg or .tif; STEM.truth.csv and STEM.json go beside it.
     #[arg(short = 'o', long = "output", value_name = "STEM.png|.jpg|.tif")]
     pub output: PathBuf,
@@ -154,9 +158,7 @@ fn pair(text: &str, what: &str, sep: char) -> Result<(f64, f64), CliError> {
 }
 
 /// Builds the camera from the flags (ranges are checked by `Camera::validate`).
-fn camera(a: &Args) -> Result<Camera, CliError> {
-    let pitch_mm =
-        parse_length_mm(&a.pixel_pitch).map_err(|e| usage(format!("--pixel-pitch: {e}")))?;
+fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
     let (w, h) = pair(&a.size.to_ascii_lowercase(), "size", 'x')?;
     if !(w >= 1.0 && h >= 1.0 && w.fract() == 0.0 && h.fract() == 0.0) {
         return Err(usage(format!(
@@ -210,7 +212,7 @@ fn camera(a: &Args) -> Result<Camera, CliError> {
     Ok(Camera {
         width_px: w as usize,
         height_px: h as usize,
-        pixel_pitch_um: pitch_mm * 1e3,
+        pixel_pitch_um,
         chart_px: a.chart_px,
         magnification: a.magnification,
         rotate_deg: a.rotate,
@@ -239,9 +241,29 @@ fn camera(a: &Args) -> Result<Camera, CliError> {
     })
 }
 
-/// The model system named by the flags (none yet: a perfect lens; the pixel aperture is the camera's).
-fn system(_a: &Args) -> Result<System, CliError> {
-    Ok(System::default())
+/// The model system named by `--system` and the factor flags; none named: a perfect lens
+/// (the camera's square pixel aperture still applies).
+fn system(a: &Args) -> Result<System, CliError> {
+    if a.factors.is_empty() {
+        Ok(System::default())
+    } else {
+        a.factors.build()
+    }
+}
+
+/// The pixel pitch in µm: `--pixel-pitch`, else the system's square sampling grid, else 4.3 µm.
+fn pitch_um(a: &Args, system: &System) -> Result<f64, CliError> {
+    if let Some(p) = &a.pixel_pitch {
+        let mm = parse_length_mm(p).map_err(|e| usage(format!("--pixel-pitch: {e}")))?;
+        return Ok(mm * 1e3);
+    }
+    match system.nyquist() {
+        Some((u, v)) if (u - v).abs() <= 1e-9 * u.max(v) && u > 0.0 => Ok(0.5 / u * 1e3),
+        Some((u, v)) => Err(usage(format!(
+            "the system's sampling grid is not square (Nyquist {u:.1} × {v:.1} cy/mm): give --pixel-pitch"
+        ))),
+        None => Ok(4.3),
+    }
 }
 
 /// Runs `sweepmtf simulate`; every error message is folded onto one line.
@@ -259,17 +281,16 @@ pub fn run(a: &Args) -> Result<(), CliError> {
 }
 
 fn run_inner(a: &Args) -> Result<(), CliError> {
-    let cam = camera(a)?;
+    let system = system(a)?;
+    let cam = camera(a, pitch_um(a, &system)?)?;
     cam.validate().map_err(sim_error)?;
     simulate::check_output(&cam, &a.output).map_err(sim_error)?;
     let target = load_target(&a.target)?;
-    let system = system(a)?;
     let shot = simulate::render(&target, &system, &cam).map_err(sim_error)?;
-    simulate::write_shot(&shot, &a.output).map_err(sim_error)?;
+    let written = simulate::write_shot(&shot, &a.output).map_err(sim_error)?;
     for w in &shot.warnings {
         eprintln!("sweepmtf: warning: {w}");
     }
-    let (_, csv, json) = simulate::output_paths(&a.output);
     let mtf_nyq = shot.truth().and_then(|t| {
         t.rows
             .windows(2)
@@ -277,17 +298,19 @@ fn run_inner(a: &Args) -> Result<(), CliError> {
             .map(|w| w[0].mtf)
     });
     println!(
-        "simulate: {} ({}×{} px, pitch {} µm), truth {}, settings {}; factors: {}{}",
-        a.output.display(),
+        "simulate: {}×{} px, pitch {} µm, factors {}{}; wrote {}",
         shot.width,
         shot.height,
         cam.pixel_pitch_um,
-        csv.display(),
-        json.display(),
         shot.factors_applied.join(" × "),
         mtf_nyq
-            .map(|m| format!("; MTF at Nyquist {m:.3}"))
-            .unwrap_or_default()
+            .map(|m| format!(", MTF at Nyquist {m:.3}"))
+            .unwrap_or_default(),
+        written
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     Ok(())
 }

@@ -8,8 +8,9 @@
 //!   so ln|z^N| = (N/2)·log1p(−4ε(1−ε)sin²(πx)) and
 //!   arg z^N = N·atan2(−ε sin 2πx, 1 − 2ε sin²(πx)); for ε > 1/2 the factor
 //!   e^(−j2πx) is pulled out and N·x is reduced modulo 1 with an error-free
-//!   product. No repeated multiplication: accurate for N up to 1e9 and
-//!   ε down to 1e-12 (and ε = 1, a pure N-pixel shift).
+//!   product; where N·arg z is large (small x, |OTF| still large) arg z is
+//!   formed in double-double. No repeated multiplication: accurate for N up
+//!   to 1e9 and ε down to 1e-12 (and ε = 1, a pure N-pixel shift).
 //! - `exp` (published, the default): exp(−N·ε·(1 − cos 2πx)), evaluated as
 //!   exp(−2Nε·sin²(πx)). It is the magnitude of the exact form to first
 //!   order in ε.
@@ -64,8 +65,9 @@ impl Cte {
         let (xh, xl) = if xh.is_finite() { (xh, xl) } else { (0.0, 0.0) };
         // Everything but the N-turn shift is periodic in x with period 1:
         // reduce x = xh + xl modulo 1 (each part exactly) into [−1/2, 1/2].
+        let (xa, xb) = (xh - xh.round(), xl - xl.round());
         let xr = {
-            let r = (xh - xh.round()) + (xl - xl.round());
+            let r = xa + xb;
             r - r.round()
         };
         let s = sin_pi(xr);
@@ -78,19 +80,75 @@ impl Cte {
                     return Complex64::new(0.0, 0.0);
                 }
                 let sin2 = sin_pi(2.0 * xr);
-                let phase = if c <= 0.5 {
-                    n * (-c * sin2).atan2(1.0 - 2.0 * c * s2)
+                let (a, b) = if c <= 0.5 {
+                    n_arg(n, c, (xa, xb), xr, s2, sin2)
                 } else {
-                    // z = e^(−j2πx)·((1−d) + d·e^(j2πx)), d = 1 − c < 1/2.
-                    let d = 1.0 - c;
-                    let own = n * (d * sin2).atan2(1.0 - 2.0 * d * s2);
+                    // z = e^(−j2πx)·((1−d) + d·e^(j2πx)), d = 1 − c < 1/2; the
+                    // second factor is the conjugate of the d-form at x.
+                    let (a, b) = n_arg(n, 1.0 - c, (xa, xb), xr, s2, sin2);
                     let turns = frac_prod(n, xh) + frac_prod(n, xl);
-                    own - 2.0 * PI * (turns - turns.round())
+                    (-a, -b - 2.0 * PI * (turns - turns.round()))
                 };
-                Complex64::from_polar(mag, phase)
+                Complex64::from_polar(mag, a) * Complex64::from_polar(1.0, b)
             }
         }
     }
+}
+
+/// The low part of π as a double-double (π = PI + PI_LO).
+const PI_LO: f64 = 1.2246467991473532e-16;
+
+/// Error-free sum: (s, e) with s + e = a + b exactly.
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// N·arg((1−c) + c·e^(−j2πx)) for c ≤ 1/2 and x ≡ xab.0 + xab.1 (mod 1), whose
+/// rounded reduction to [−1/2, 1/2] is `xr`, given s2 = sin²(πx) and
+/// sin2 = sin(2πx), as a pair (a, b) whose sum is the phase.
+///
+/// A large phase (up to ~1e5 rad while |OTF| is still far from 0, for N = 1e9)
+/// needs arg to ~1e-19 relative: there (|x| < 0.01) arg = atan(q), q = Im/Re,
+/// is formed in double-double (sin 2πx by its Taylor series, π split in two)
+/// and N·q is split exactly, so the phase stays accurate to ~1e-14 rad.
+fn n_arg(n: f64, c: f64, xab: (f64, f64), xr: f64, s2: f64, sin2: f64) -> (f64, f64) {
+    let plain = n * (-c * sin2).atan2(1.0 - 2.0 * c * s2);
+    if plain.abs() <= 1.0 || xr.abs() >= 0.01 {
+        return (plain, 0.0);
+    }
+    // y = 2πx in double-double, from both parts of x (|x| < 0.01 here, so
+    // xab.0 + xab.1 is x itself, not x ± 1).
+    let (p1, e1) = two_prod(2.0 * PI, xab.0);
+    let (p2, e2) = two_prod(2.0 * PI, xab.1);
+    let (y_hi, e3) = two_sum(p1, p2);
+    let y_lo = e1 + e2 + e3 + 2.0 * PI_LO * xr;
+    // sin y = y + y·k, k = −y²/6 + y⁴/120 − …, |y| < 0.063.
+    let y2 = y_hi * y_hi;
+    let k = y2
+        * (-1.0 / 6.0
+            + y2 * (1.0 / 120.0 + y2 * (-1.0 / 5040.0 + y2 * (1.0 / 362880.0 - y2 / 39916800.0))));
+    let (s_hi, e) = two_sum(y_hi, y_hi * k);
+    let s_lo = e + y_lo * (1.0 + k);
+    // Im = −c·sin y; Re = 1 − δ, δ = 2c·sin²(πx) (small; f64 suffices).
+    let (im_hi, e) = two_prod(-c, s_hi);
+    let im_lo = e - c * s_lo;
+    let delta = 2.0 * c * s2;
+    // q = Im/Re = Im·(1 + δ/(1−δ)).
+    let (q_hi, e) = two_sum(im_hi, im_hi * (delta / (1.0 - delta)));
+    let q_lo = e + im_lo / (1.0 - delta);
+    // atan q = q − corr, corr = q³/3 − q⁵/5 + … (|q| < 0.07: 11 terms).
+    let q2 = q_hi * q_hi;
+    let mut corr = 0.0;
+    let mut term = q_hi * q2;
+    for k in 1..=11 {
+        let sign = if k % 2 == 1 { 1.0 } else { -1.0 };
+        corr += sign * term / (2 * k + 1) as f64;
+        term *= q2;
+    }
+    let (a, e) = two_prod(n, q_hi);
+    (a, e + n * q_lo - n * corr)
 }
 
 impl Factor for Cte {

@@ -164,6 +164,27 @@ mod tests {
     }
 
     #[test]
+    fn table_agrees_with_an_independent_measurement() {
+        // Schinke et al., AIP Advances 5 (2015) 067168, 295 K: extinction k at
+        // λ; α = 4πk/λ. Their stated uncertainty is about 11 % near 600 nm.
+        for (nm, k) in [
+            (450.0, 9.5362e-2),
+            (550.0, 2.8038e-2),
+            (600.0, 1.8521e-2),
+            (700.0, 1.0623e-2),
+            (750.0, 7.6156e-3),
+        ] {
+            let lambda_mm = nm * 1e-6;
+            let want = 4.0 * PI * k / lambda_mm;
+            let got = silicon_alpha_per_mm(lambda_mm).unwrap();
+            assert!(
+                (got / want - 1.0).abs() < 0.08,
+                "{nm} nm: {got} vs {want} /mm"
+            );
+        }
+    }
+
+    #[test]
     fn unity_at_zero_and_decreasing() {
         let d = Diffusion::new(50.0, 0.002, 0.01);
         assert_eq!(d.mtf_radial(0.0), 1.0);

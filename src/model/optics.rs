@@ -3,9 +3,9 @@
 //!
 //! With s = ρ/u_c, ρ = √(u²+v²), eq. 44 reads OTF = (2/π)[acos s − s√(1−s²)].
 //! Writing β = acos s and x = 2β it is OTF = (x − sin x)/π, which is evaluated
-//! without cancellation: β = 2·asin(√(t/2)) from t = 1 − s (computed with an
-//! error-free product of ρ and λ·F#, so t keeps its relative accuracy within
-//! 1e-12 of the cutoff), and x − sin x by its Taylor series for small x. Any
+//! without cancellation: β = 2·asin(√(t/2)) from t = 1 − s (near the cutoff
+//! computed as (1 − s²)/(1 + s) with u², v² and (λ·F#)² in double-double, so
+//! t keeps its relative accuracy within 1e-12 of the cutoff, on and off axis), and x − sin x by its Taylor series for small x. Any
 //! s ≥ 1, however it rounds, gives exactly 0: never NaN.
 //!
 //! Defocus (`--defocus`) comes in two forms:
@@ -60,9 +60,38 @@ impl Diffraction {
     }
 }
 
-/// t = 1 − ρ·w for w = w.0 + w.1 (exact product), accurate to a few ulps of t.
-fn one_minus(rho: f64, w: (f64, f64)) -> f64 {
-    rho.mul_add(-w.0, 1.0) - rho * w.1
+/// Error-free sum: (s, e) with s = fl(a + b) and a + b = s + e exactly.
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// t = 1 − ρ·w with ρ = √(u²+v²) and w = w.0 + w.1 (an exact product λ·F#).
+///
+/// Near the cutoff (ρw close to 1) it is computed as (1 − ρ²w²)/(1 + ρw) with
+/// u², v² and w² carried in double-double, so that t keeps its relative
+/// accuracy on and off axis (no rounding of √(u²+v²) enters); elsewhere
+/// 1 − ρ·w directly.
+fn one_minus(u: f64, v: f64, w: (f64, f64)) -> f64 {
+    let rho = u.hypot(v);
+    let s = rho * w.0;
+    if !(0.5..=2.0).contains(&s) {
+        return rho.mul_add(-w.0, 1.0) - rho * w.1;
+    }
+    // ρ² = u² + v² as hi + lo.
+    let (uh, ul) = two_prod(u, u);
+    let (vh, vl) = two_prod(v, v);
+    let (r_hi, e) = two_sum(uh, vh);
+    let r_lo = e + ul + vl;
+    // w² = w0² + 2·w0·w1 as hi + lo.
+    let (w_hi, e) = two_prod(w.0, w.0);
+    let w_lo = e + 2.0 * w.0 * w.1;
+    // ρ²w² − 1 with the big parts exact.
+    let (p_hi, p_e) = two_prod(r_hi, w_hi);
+    let small = p_e + r_hi * w_lo + r_lo * w_hi;
+    let one_minus_s2 = (1.0 - p_hi) - small;
+    one_minus_s2 / (1.0 + rho.mul_add(w.0, rho * w.1))
 }
 
 /// x − sin x for x in [0, π], without cancellation at small x.
@@ -113,8 +142,7 @@ impl Factor for Diffraction {
         "diffraction".into()
     }
     fn otf(&self, u: f64, v: f64) -> Complex64 {
-        let rho = u.hypot(v);
-        Complex64::new(diffraction_otf_t(one_minus(rho, self.w)), 0.0)
+        Complex64::new(diffraction_otf_t(one_minus(u, v, self.w)), 0.0)
     }
 }
 
@@ -238,8 +266,7 @@ impl Factor for DefocusWave {
         "defocus".into()
     }
     fn otf(&self, u: f64, v: f64) -> Complex64 {
-        let rho = u.hypot(v);
-        Complex64::new(self.otf_t(one_minus(rho, self.w)), 0.0)
+        Complex64::new(self.otf_t(one_minus(u, v, self.w)), 0.0)
     }
 }
 

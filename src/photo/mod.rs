@@ -3,7 +3,9 @@
 //! linear values on known pixel sites, which the measurement bins without
 //! resampling (a Bayer colour's sites are a sparse plane; no demosaicing).
 
+pub mod decode;
 pub mod exif;
+pub mod linearise;
 pub mod pitch;
 pub mod raw;
 

@@ -1,6 +1,11 @@
 //! Writing results: CSV, JSON summaries and plots, atomically.
 
+pub mod atomic;
+pub mod csv;
+pub mod json;
 pub mod model_cut;
 pub mod model_io;
 pub mod model_map;
 pub mod model_points;
+pub mod mtf_plot;
+pub mod roi_plot;

@@ -187,6 +187,7 @@ where
     let mut chart = ChartBuilder::on(&root)
         .caption(title, (FONT, 24))
         .margin(16)
+        .margin_right(32)
         .x_label_area_size(50)
         .y_label_area_size(60)
         .build_cartesian_2d(0.0..f_max, 0.0..1.05f64)

@@ -175,10 +175,11 @@ fn put(buf: &mut [u8], w: u32, x: i32, y: i32, c: [u8; 3]) {
     buf[i..i + 3].copy_from_slice(&c);
 }
 
-/// Renders the map as PNG bytes (plot area one pixel per sample when it fits).
+/// Renders the map as PNG bytes (plot area one pixel per sample, at least 512 pixels wide).
 pub fn render_map(map: &MtfMap, title: &str) -> Result<Vec<u8>, String> {
     ensure_font();
-    let n = map.size as u32;
+    // Small maps are shown enlarged (nearest sample) so the frame stays legible.
+    let n = (map.size as u32).max(512);
     // Chart margins around an n×n plot area (see draw_frame): left 12+76,
     // right 12 + colour bar area, top 12 + caption, bottom 12+56.
     let w = n + 12 + 76 + 12 + BAR_AREA;
@@ -198,9 +199,12 @@ pub fn render_map(map: &MtfMap, title: &str) -> Result<Vec<u8>, String> {
             let (c, r) = at(px, py);
             let v = value(c, r);
             let mut colour = viridis(v);
-            // Contours: a level between this sample and its right or lower neighbour.
-            let right = value((c + 1).min(map.size - 1), r);
-            let down = value(c, (r + 1).min(map.size - 1));
+            // Contours: a level between this pixel's sample and that of the
+            // pixel to its right or below (1 pixel wide, also when enlarged).
+            let (cr, rr) = at((px + 1).min(xr.end - 1), py);
+            let (cd, rd) = at(px, (py + 1).min(yr.end - 1));
+            let right = value(cr, rr);
+            let down = value(cd, rd);
             for lev in CONTOURS {
                 let cross = |a: f64, b: f64| (a - lev) * (b - lev) < 0.0;
                 if cross(v, right) || cross(v, down) {

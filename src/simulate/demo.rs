@@ -3,6 +3,7 @@
 //! chart file or a model file: one sweep strip, white/grey/black patches and
 //! four fiducials.
 
+use super::{Camera, SimError};
 use crate::model::Factor;
 use crate::target::{Direction, Fiducial, FiducialKind, GreyPatch, Rect, Sweep, SweepLaw, Target};
 use num_complex::Complex64;
@@ -80,6 +81,34 @@ pub fn demo_target(law: SweepLaw) -> Target {
     }
 }
 
+/// The demo target with its sweep rescaled so that, placed by `camera`, it runs
+/// from `f_min_cy_px` to `f_max_cy_px` in the image (exact without tilt; at the
+/// strip's centre with tilt). Errors if the demo target cannot be placed.
+pub fn demo_target_for(
+    camera: &Camera,
+    law: SweepLaw,
+    f_min_cy_px: f64,
+    f_max_cy_px: f64,
+) -> Result<Target, SimError> {
+    let mut t = demo_target(law);
+    let p = super::placement::place(camera, &t)?;
+    let sw = &t.sweeps[0];
+    let c = [
+        sw.rect.x_mm + sw.rect.width_mm / 2.0,
+        sw.rect.y_mm + sw.rect.height_mm / 2.0,
+    ];
+    let j = p.chart_to_image.jacobian(c);
+    let px_per_mm = j[0][0].hypot(j[1][0]); // image length of a chart mm along x
+    if !(f_min_cy_px > 0.0 && f_max_cy_px > f_min_cy_px) {
+        return Err(SimError::Parameter(format!(
+            "sweep range {f_min_cy_px}–{f_max_cy_px} cy/px: need 0 < f_min < f_max"
+        )));
+    }
+    t.sweeps[0].f_min_cy_mm = f_min_cy_px * px_per_mm;
+    t.sweeps[0].f_max_cy_mm = f_max_cy_px * px_per_mm;
+    Ok(t)
+}
+
 /// An isotropic Gaussian point spread function of standard deviation `sigma_mm`
 /// on the sensor: OTF = exp(−2π²σ²(u² + v²)), real and positive.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,6 +132,22 @@ impl Factor for GaussianPsf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn demo_target_for_reaches_the_asked_image_frequencies() {
+        let cam = Camera {
+            rotate_deg: 25.0,
+            ..Camera::noiseless(600, 400)
+        };
+        let t = demo_target_for(&cam, SweepLaw::Log, 0.01, 0.7).unwrap();
+        let p = crate::simulate::placement::place(&cam, &t).unwrap();
+        let sw = &t.sweeps[0];
+        let a = p.chart_to_image.apply([sw.rect.x_mm, 50.0]);
+        let b = p.chart_to_image.apply([sw.rect.x_mm + 1.0, 50.0]);
+        let px_per_mm = (b[0] - a[0]).hypot(b[1] - a[1]);
+        assert!((sw.f_max_cy_mm / px_per_mm - 0.7).abs() < 1e-9);
+        assert!((sw.f_min_cy_mm / px_per_mm - 0.01).abs() < 1e-9);
+    }
 
     #[test]
     fn demo_target_is_valid_and_has_the_promised_layout() {

@@ -140,6 +140,10 @@ impl Shot {
                 "freq_cy_px_end": s.rows.last().map(|r| r.freq_cy_px),
             })).collect::<Vec<_>>(),
             "patches": self.patches,
+            "patches_csv": (!self.patches.is_empty()).then(|| {
+                let stem = Path::new(photo).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                format!("{stem}.patches.csv")
+            }),
             "warnings": self.warnings,
             "camera": c,
         })
@@ -301,9 +305,10 @@ pub fn check_output(camera: &Camera, path: &Path) -> Result<PhotoFormat, SimErro
 }
 
 /// Writes the photo to `path` (format from its extension), `STEM.truth.csv`
-/// (first sweep; others as `STEM.truth.ID.csv`) and `STEM.json`, each atomically;
-/// everything is encoded before the first file is written.
-pub fn write_shot(shot: &Shot, path: &Path) -> Result<(), SimError> {
+/// (first sweep; others as `STEM.truth.ID.csv`), `STEM.patches.csv` (when the
+/// target has sine patches) and `STEM.json`, each atomically; everything is
+/// encoded before the first file is written. Returns the paths written.
+pub fn write_shot(shot: &Shot, path: &Path) -> Result<Vec<PathBuf>, SimError> {
     check_output(&shot.camera, path)?;
     let format = PhotoFormat::from_path(path)?;
     let photo = shot.encode(format)?;
@@ -312,9 +317,10 @@ pub fn write_shot(shot: &Shot, path: &Path) -> Result<(), SimError> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let internal = |e: csv::Error| SimError::Internal(e.to_string());
     let mut files = vec![(path.to_path_buf(), photo)];
     for (i, s) in shot.sweeps.iter().enumerate() {
-        let csv = truth::truth_csv(s).map_err(|e| SimError::Internal(e.to_string()))?;
+        let csv = truth::truth_csv(s).map_err(internal)?;
         let p = if i == 0 {
             csv_path.clone()
         } else {
@@ -322,11 +328,15 @@ pub fn write_shot(shot: &Shot, path: &Path) -> Result<(), SimError> {
         };
         files.push((p, csv));
     }
+    if !shot.patches.is_empty() {
+        let csv = truth::patches_csv(&shot.patches, shot.camera.pitch_mm()).map_err(internal)?;
+        files.push((path.with_extension("patches.csv"), csv));
+    }
     let json = serde_json::to_vec_pretty(&shot.settings_json(&photo_name))
         .map_err(|e| SimError::Internal(e.to_string()))?;
     files.push((json_path, json));
     for (p, bytes) in &files {
         write_atomic(p, bytes)?;
     }
-    Ok(())
+    Ok(files.into_iter().map(|(p, _)| p).collect())
 }

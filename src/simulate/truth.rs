@@ -174,6 +174,39 @@ pub fn truth_csv(t: &SweepTruth) -> Result<Vec<u8>, csv::Error> {
     w.into_inner().map_err(|e| e.into_error().into())
 }
 
+/// One row of the sine patches' truth table.
+#[derive(Debug, Serialize)]
+struct PatchRow<'a> {
+    id: &'a str,
+    freq_cy_px: f64,
+    mtf: f64,
+    freq_cy_mm: f64,
+    chart_contrast: f64,
+    modulation: f64,
+    x_px: f64,
+    y_px: f64,
+}
+
+/// The sine patches' truth as CSV text:
+/// `id,freq_cy_px,mtf,freq_cy_mm,chart_contrast,modulation,x_px,y_px` (x, y: the patch centre).
+pub fn patches_csv(patches: &[PatchTruth], pitch_mm: f64) -> Result<Vec<u8>, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for p in patches {
+        let c = &p.corners;
+        w.serialize(PatchRow {
+            id: &p.id,
+            freq_cy_px: p.freq_cy_px,
+            mtf: p.mtf,
+            freq_cy_mm: p.freq_cy_px / pitch_mm,
+            chart_contrast: p.chart_contrast,
+            modulation: p.modulation,
+            x_px: (c[0] + c[2] + c[4] + c[6]) / 4.0,
+            y_px: (c[1] + c[3] + c[5] + c[7]) / 4.0,
+        })?;
+    }
+    w.into_inner().map_err(|e| e.into_error().into())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

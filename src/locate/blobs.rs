@@ -1,0 +1,479 @@
+//! Dark-blob detection on the search image: pixels darker than 60 % of their
+//! neighbourhood's mean (a box window about the size of the largest expected
+//! fiducial, so vignetting and gradients cancel) are grouped into connected
+//! components; those of plausible size and aspect are tested along 32 rays:
+//! the dark→white edge must lie on one ellipse (the image of a disk) and the
+//! surround must be uniformly white (the fiducial's white square). Each test
+//! result is kept as a [`Candidate`] for the debug picture.
+
+use super::Candidate;
+use super::sample::Gray;
+use crate::geometry::Point;
+use rayon::prelude::*;
+
+/// Number of rays used to test a blob's outline.
+pub const RAYS: usize = 32;
+/// A pixel is dark when below this fraction of its neighbourhood's mean.
+pub const DARK_FRACTION: f32 = 0.6;
+/// Smallest blob considered (search-image samples).
+pub const MIN_AREA: usize = 7;
+
+/// A component's raw statistics (grid coordinates of the search image).
+#[derive(Debug, Clone, Copy)]
+struct Comp {
+    n: usize,
+    sx: f64,
+    sy: f64,
+    sxx: f64,
+    syy: f64,
+    sxy: f64,
+    touches_border: bool,
+}
+
+/// The blobs of the search image (under two dark masks: relative to the local mean
+/// and to the local white level) and of a 2× coarser copy (where small rings fill in
+/// to solid blobs), each tested for being a fiducial (image px), without duplicates.
+pub fn find_candidates(g: &Gray<'_>) -> Vec<Candidate> {
+    let mut out = find_candidates_one(g, &dark_mask(g));
+    merge(&mut out, find_candidates_one(g, &dark_mask_white(g)));
+    if g.w.min(g.h) >= 200 {
+        let coarse = super::downscale::box_reduce(g, 2);
+        merge(&mut out, find_candidates_one(&coarse, &dark_mask(&coarse)));
+    }
+    mark_crowded(&mut out);
+    out
+}
+
+/// Adds new candidates unless one is already there (a disk-like one is preferred).
+fn merge(out: &mut Vec<Candidate>, more: Vec<Candidate>) {
+    for c in more {
+        let r = 2.0 * (c.cov_px2[0] + c.cov_px2[2]).sqrt();
+        let near = |f: &Candidate| {
+            (f.centre_px[0] - c.centre_px[0]).hypot(f.centre_px[1] - c.centre_px[1]) < r
+        };
+        let dup = out.iter().any(|f| near(f) && (f.disk_like || !c.disk_like));
+        if !dup {
+            out.retain(|f| !near(f));
+            out.push(c);
+        }
+    }
+}
+
+/// Dark mask: value < 0.5 × the local white level (maximum over a window of side ≈ 7 %
+/// of the short side, taken on a grid of b×b block maxima); keeps thin dark rings whole
+/// where the mean is pulled down by a dark neighbourhood.
+fn dark_mask_white(g: &Gray<'_>) -> Vec<bool> {
+    let (w, h) = (g.w, g.h);
+    let r = ((0.035 * w.min(h) as f64).round() as usize).clamp(3, 100);
+    let b = (r / 4).max(1);
+    let (bw, bh) = (w.div_ceil(b), h.div_ceil(b));
+    let mut blocks = vec![f32::NEG_INFINITY; bw * bh];
+    for j in 0..h {
+        let row = &g.data[j * w..(j + 1) * w];
+        let brow = &mut blocks[(j / b) * bw..(j / b + 1) * bw];
+        for (i, &v) in row.iter().enumerate() {
+            let m = &mut brow[i / b];
+            if v > *m {
+                *m = v;
+            }
+        }
+    }
+    let rb = r.div_ceil(b);
+    let mut rows = Vec::with_capacity(bw * bh);
+    for j in 0..bh {
+        rows.extend(sliding_max(&blocks[j * bw..(j + 1) * bw], rb));
+    }
+    let mut white = vec![0.0f32; bw * bh];
+    let mut col = vec![0.0f32; bh];
+    for i in 0..bw {
+        for j in 0..bh {
+            col[j] = rows[j * bw + i];
+        }
+        for (j, v) in sliding_max(&col, rb).into_iter().enumerate() {
+            white[j * bw + i] = v;
+        }
+    }
+    let mut mask = vec![false; w * h];
+    mask.par_chunks_mut(w).enumerate().for_each(|(j, m)| {
+        let wrow = &white[(j / b) * bw..(j / b + 1) * bw];
+        let row = &g.data[j * w..(j + 1) * w];
+        for (i, (mv, &v)) in m.iter_mut().zip(row).enumerate() {
+            *mv = v < 0.5 * wrow[i / b];
+        }
+    });
+    mask
+}
+
+/// Maximum over [i−r, i+r] (clamped), van Herk / Gil–Werman.
+fn sliding_max(x: &[f32], r: usize) -> Vec<f32> {
+    let n = x.len();
+    let k = 2 * r + 1;
+    let mut fwd = vec![f32::NEG_INFINITY; n];
+    let mut bwd = vec![f32::NEG_INFINITY; n];
+    for i in 0..n {
+        fwd[i] = if i % k == 0 {
+            x[i]
+        } else {
+            fwd[i - 1].max(x[i])
+        };
+    }
+    for i in (0..n).rev() {
+        bwd[i] = if i % k == k - 1 || i == n - 1 {
+            x[i]
+        } else {
+            bwd[i + 1].max(x[i])
+        };
+    }
+    (0..n)
+        .map(|i| {
+            let lo = i.saturating_sub(r);
+            let hi = (i + r).min(n - 1);
+            if lo / k == hi / k {
+                // One block (a window clipped at an end): direct.
+                x[lo..=hi].iter().cloned().fold(f32::NEG_INFINITY, f32::max)
+            } else {
+                bwd[lo].max(fwd[hi])
+            }
+        })
+        .collect()
+}
+
+/// A fiducial sits alone on its white square (side two diameters): a disk-like blob with
+/// another disk-like blob of similar size reaching into that square is rejected (dense
+/// dot grids).
+fn mark_crowded(cands: &mut [Candidate]) {
+    let radius_towards = |c: &Candidate, u: Point| {
+        let [cxx, cxy, cyy] = c.cov_px2;
+        let det = cxx * cyy - cxy * cxy;
+        let q = (u[0] * u[0] * cyy - 2.0 * u[0] * u[1] * cxy + u[1] * u[1] * cxx) / det;
+        2.0 / q.sqrt()
+    };
+    let mean_radius = |c: &Candidate| {
+        let [cxx, cxy, cyy] = c.cov_px2;
+        2.0 * (cxx * cyy - cxy * cxy).max(0.0).sqrt().sqrt()
+    };
+    let crowded: Vec<bool> = cands
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            a.disk_like
+                && cands.iter().enumerate().any(|(j, b)| {
+                    // Only another disk-like blob of comparable size counts (a dot grid);
+                    // fragments of a dark surround next to the chart do not.
+                    let ratio = mean_radius(b) / mean_radius(a);
+                    if i == j || !b.disk_like || !(0.5..=2.0).contains(&ratio) {
+                        return false;
+                    }
+                    let d = [
+                        b.centre_px[0] - a.centre_px[0],
+                        b.centre_px[1] - a.centre_px[1],
+                    ];
+                    let dist = d[0].hypot(d[1]);
+                    if dist <= 0.0 {
+                        return false;
+                    }
+                    let u = [d[0] / dist, d[1] / dist];
+                    dist - mean_radius(b) < 1.9 * radius_towards(a, u)
+                })
+        })
+        .collect();
+    for (c, crowd) in cands.iter_mut().zip(crowded) {
+        if crowd {
+            c.disk_like = false;
+            c.why = "another blob inside its white square";
+        }
+    }
+}
+
+fn find_candidates_one(g: &Gray<'_>, dark: &[bool]) -> Vec<Candidate> {
+    let comps = components(dark, g.w, g.h);
+    let short = g.w.min(g.h) as f64;
+    let max_area = (0.25 * short).powi(2);
+    comps
+        .par_iter()
+        .filter(|c| c.n >= MIN_AREA && (c.n as f64) <= max_area && !c.touches_border)
+        .filter_map(|c| test_blob(g, c))
+        .collect()
+}
+
+/// Dark mask: value < DARK_FRACTION × box mean over a window of side ≈ 15 % of the short side.
+fn dark_mask(g: &Gray<'_>) -> Vec<bool> {
+    let (w, h) = (g.w, g.h);
+    let r = ((0.07 * w.min(h) as f64).round() as usize).clamp(4, 200);
+    // Integral image, (w+1)×(h+1).
+    let mut ii = vec![0.0f64; (w + 1) * (h + 1)];
+    for j in 0..h {
+        let mut run = 0.0f64;
+        for i in 0..w {
+            run += g.data[j * w + i] as f64;
+            ii[(j + 1) * (w + 1) + i + 1] = ii[j * (w + 1) + i + 1] + run;
+        }
+    }
+    let mut mask = vec![false; w * h];
+    mask.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
+        let y0 = j.saturating_sub(r);
+        let y1 = (j + r + 1).min(h);
+        for (i, m) in row.iter_mut().enumerate() {
+            let x0 = i.saturating_sub(r);
+            let x1 = (i + r + 1).min(w);
+            let s = ii[y1 * (w + 1) + x1] - ii[y0 * (w + 1) + x1] - ii[y1 * (w + 1) + x0]
+                + ii[y0 * (w + 1) + x0];
+            let mean = s / ((x1 - x0) * (y1 - y0)) as f64;
+            *m = (g.data[j * w + i] as f64) < DARK_FRACTION as f64 * mean;
+        }
+    });
+    mask
+}
+
+/// 8-connected components of the mask.
+fn components(mask: &[bool], w: usize, h: usize) -> Vec<Comp> {
+    let mut seen = vec![false; w * h];
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..w * h {
+        if !mask[start] || seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        stack.push(start);
+        let mut c = Comp {
+            n: 0,
+            sx: 0.0,
+            sy: 0.0,
+            sxx: 0.0,
+            syy: 0.0,
+            sxy: 0.0,
+            touches_border: false,
+        };
+        while let Some(p) = stack.pop() {
+            let (i, j) = (p % w, p / w);
+            let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+            c.n += 1;
+            c.sx += x;
+            c.sy += y;
+            c.sxx += x * x;
+            c.syy += y * y;
+            c.sxy += x * y;
+            if i == 0 || j == 0 || i + 1 == w || j + 1 == h {
+                c.touches_border = true;
+            }
+            for dj in -1i64..=1 {
+                for di in -1i64..=1 {
+                    let (ni, nj) = (i as i64 + di, j as i64 + dj);
+                    if ni < 0 || nj < 0 || ni >= w as i64 || nj >= h as i64 {
+                        continue;
+                    }
+                    let q = nj as usize * w + ni as usize;
+                    if mask[q] && !seen[q] {
+                        seen[q] = true;
+                        stack.push(q);
+                    }
+                }
+            }
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The ray test of one blob; `None` when its statistics already rule it out.
+fn test_blob(g: &Gray<'_>, c: &Comp) -> Option<Candidate> {
+    let n = c.n as f64;
+    let (mx, my) = (c.sx / n, c.sy / n);
+    // Pixel-area moments (+1/12 for the extent of each square sample).
+    let cxx = c.sxx / n - mx * mx + 1.0 / 12.0;
+    let cyy = c.syy / n - my * my + 1.0 / 12.0;
+    let cxy = c.sxy / n - mx * my;
+    let det = cxx * cyy - cxy * cxy;
+    if det <= 0.0 {
+        return None;
+    }
+    let tr = cxx + cyy;
+    let disc = ((cxx - cyy).powi(2) / 4.0 + cxy * cxy).sqrt();
+    let (l1, l2) = (tr / 2.0 + disc, tr / 2.0 - disc);
+    if l2 <= 0.0 || (l2 / l1).sqrt() < 0.3 {
+        return None;
+    }
+    let fill = n / (4.0 * std::f64::consts::PI * det.sqrt());
+    if !(0.45..=1.3).contains(&fill) {
+        return None;
+    }
+    let t = ray_test(g, [mx, my], [cxx, cxy, cyy])?;
+    let s = g.scale;
+    let cov_img = [
+        t.cov[0] * s[0] * s[0],
+        t.cov[1] * s[0] * s[1],
+        t.cov[2] * s[1] * s[1],
+    ];
+    Some(Candidate {
+        centre_px: g.to_img([mx, my]),
+        cov_px2: cov_img,
+        ring_score: t.ring_score,
+        contrast: t.contrast,
+        disk_like: t.disk_like,
+        why: t.why,
+        used: false,
+    })
+}
+
+/// What the rays saw around a blob.
+#[derive(Debug, Clone, Copy)]
+pub struct RayTest {
+    /// Covariance of the equivalent solid ellipse whose edge is at the measured edge (grid units²).
+    pub cov: [f64; 3],
+    /// Centre brightness between dark (0) and white (1).
+    pub ring_score: f64,
+    /// (white − dark)/white.
+    pub contrast: f64,
+    /// Median dark and white levels.
+    pub dark: f64,
+    /// Median white level of the surround.
+    pub white: f64,
+    /// Passed: round outline and uniform white surround.
+    pub disk_like: bool,
+    /// Why it failed ("" when it passed).
+    pub why: &'static str,
+}
+
+/// Casts [`RAYS`] rays from `centre` (grid units) across an ellipse of covariance `cov`
+/// (edge at 2σ) and tests whether the dark→white edge is elliptical with a white surround.
+pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
+    let [cxx, cxy, cyy] = cov;
+    let det = cxx * cyy - cxy * cxy;
+    let (ixx, ixy, iyy) = (cyy / det, -cxy / det, cxx / det);
+    // Pass 1: profiles, and the edge on each ray (white level just outside the blob).
+    struct Ray {
+        rho: f64,
+        step: f64,
+        prof: Vec<f64>,
+        dark: f64,
+        q: f64,
+    }
+    let mut rays: Vec<Ray> = Vec::with_capacity(RAYS);
+    let mut rho_sum = 0.0;
+    for k in 0..RAYS {
+        let a = 2.0 * std::f64::consts::PI * k as f64 / RAYS as f64;
+        let (ux, uy) = (a.cos(), a.sin());
+        let rho = 2.0 / (ux * ux * ixx + 2.0 * ux * uy * ixy + uy * uy * iyy).sqrt();
+        rho_sum += rho;
+        let step = (rho / 24.0).min(0.25);
+        let m = (1.95 * rho / step).ceil() as usize + 1;
+        let mut prof = Vec::with_capacity(m);
+        for i in 0..m {
+            let t = i as f64 * step;
+            match g.bilinear([centre[0] + t * ux, centre[1] + t * uy]) {
+                Some(v) => prof.push(v),
+                None => break,
+            }
+        }
+        if prof.len() < m {
+            continue; // leaves the image (a mark near the border): judge on the other rays
+        }
+        let idx = |t: f64| ((t / step).round() as usize).min(m - 1);
+        let (w0, w1) = (idx(1.3 * rho), idx(1.6 * rho));
+        let white = prof[w0..=w1].iter().sum::<f64>() / (w1 - w0 + 1) as f64;
+        let dark = prof[..=idx(rho)]
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
+        let thr = 0.5 * (dark + white);
+        let mut e = None;
+        for i in (0..idx(1.3 * rho)).rev() {
+            if prof[i] < thr {
+                let (p0, p1) = (prof[i], prof[i + 1]);
+                let f = if p1 > p0 { (thr - p0) / (p1 - p0) } else { 0.5 };
+                e = Some((i as f64 + f.clamp(0.0, 1.0)) * step);
+                break;
+            }
+        }
+        if let Some(e) = e {
+            rays.push(Ray {
+                rho,
+                step,
+                prof,
+                dark,
+                q: e / rho,
+            });
+        }
+    }
+    if rays.len() < RAYS * 2 / 3 {
+        return None;
+    }
+    let med = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let nq = rays.len() as f64;
+    let qm = rays.iter().map(|r| r.q).sum::<f64>() / nq;
+    let qsd = (rays.iter().map(|r| (r.q - qm).powi(2)).sum::<f64>() / nq).sqrt();
+    let qmed = med(rays.iter().map(|r| r.q).collect());
+    // Pass 2: the surround, 1.3–1.7 edge radii out (inside a fiducial's white square).
+    let whites: Vec<f64> = rays
+        .iter()
+        .map(|r| {
+            let m = r.prof.len();
+            let idx = |t: f64| ((t / r.step).round() as usize).min(m - 1);
+            let (w0, w1) = (idx(1.3 * qmed * r.rho), idx(1.7 * qmed * r.rho));
+            r.prof[w0..=w1].iter().sum::<f64>() / (w1 - w0 + 1) as f64
+        })
+        .collect();
+    let white = med(whites.clone());
+    let dark = med(rays.iter().map(|r| r.dark).collect());
+    let span = white - dark;
+    if span <= 0.0 || white <= 0.0 {
+        return None;
+    }
+    let (mut cv, mut cn) = (0.0, 0.0);
+    for r in &rays {
+        for (i, &v) in r.prof.iter().enumerate() {
+            if i as f64 * r.step <= 0.15 * qmed * r.rho {
+                cv += v;
+                cn += 1.0;
+            }
+        }
+    }
+    let contrast = span / white;
+    let rho_mean = rho_sum / RAYS as f64 * qm;
+    let round = qsd / qm <= 0.05 + 0.35 / rho_mean.max(1.0);
+    // At least 3/4 of the rays see white: the white square is only one mark diameter
+    // from the centre at the frame's edges, so a few rays may reach the surroundings.
+    let white_rays = whites.iter().filter(|&&w| w >= dark + 0.6 * span).count();
+    let uniform = 4 * white_rays >= 3 * whites.len();
+    let ring_score = (cv / f64::max(cn, 1.0) - dark) / span;
+    Some(RayTest {
+        cov: [cxx * qm * qm, cxy * qm * qm, cyy * qm * qm],
+        ring_score,
+        contrast,
+        dark,
+        white,
+        disk_like: round && uniform && contrast >= 0.35,
+        why: if !round {
+            "outline not elliptical"
+        } else if !uniform {
+            "surround not uniformly white"
+        } else if contrast < 0.35 {
+            "low contrast"
+        } else {
+            ""
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sliding_max_matches_brute_force() {
+        let x: Vec<f32> = (0..57).map(|i| ((i * 37) % 23) as f32).collect();
+        for r in [0, 1, 3, 10, 60] {
+            let got = sliding_max(&x, r);
+            for (i, &g) in got.iter().enumerate() {
+                let lo = i.saturating_sub(r);
+                let hi = (i + r).min(x.len() - 1);
+                let want = x[lo..=hi].iter().cloned().fold(f32::NEG_INFINITY, f32::max);
+                assert_eq!(g, want, "r {r} i {i}");
+            }
+        }
+    }
+}

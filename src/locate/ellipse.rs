@@ -1,0 +1,461 @@
+//! Sub-pixel fiducial centres at full resolution. The dark→white edge of each
+//! mark is found on 64 rays (threshold halfway between the ray's own dark and
+//! white levels, so a light gradient across the mark does not bias it), an
+//! ellipse is fitted to the edge points (with outlier rejection), and its
+//! centre is taken. Under perspective the centre of the imaged ellipse is not
+//! the image of the disk's centre; the shift is predicted by projecting the
+//! disk's circle through the current homography as a conic and removed
+//! (two iterations). Then the homography and the frame corners follow.
+
+use super::assign::{Pick, affine3};
+use super::sample::Gray;
+use super::{Candidate, Located};
+use crate::geometry::{Homography, Point, rect_corners};
+use crate::photo::Plane;
+use crate::target::Target;
+
+/// Rays used for the full-resolution edge fit.
+pub const RAYS: usize = 64;
+
+/// An ellipse: centre and covariance of the solid ellipse whose edge is at 2σ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ellipse {
+    /// Centre.
+    pub centre: Point,
+    /// Covariance [xx, xy, yy].
+    pub cov: [f64; 3],
+}
+
+/// Least-squares ellipse through points (conic with a + c = 1, outliers beyond 3 MAD dropped once).
+pub fn fit_ellipse(points: &[Point]) -> Option<Ellipse> {
+    let mut pts: Vec<Point> = points.to_vec();
+    let mut e = fit_once(&pts)?;
+    for _ in 0..2 {
+        let res: Vec<f64> = pts.iter().map(|p| radial_residual(&e, *p)).collect();
+        let mut abs: Vec<f64> = res.iter().map(|r| r.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        let mad = abs[abs.len() / 2].max(1e-3);
+        let keep: Vec<Point> = pts
+            .iter()
+            .zip(&res)
+            .filter(|(_, r)| r.abs() <= 3.0 * 1.4826 * mad)
+            .map(|(p, _)| *p)
+            .collect();
+        if keep.len() == pts.len() || keep.len() < 8 {
+            break;
+        }
+        pts = keep;
+        e = fit_once(&pts)?;
+    }
+    Some(e)
+}
+
+/// Radial distance of a point from the ellipse (approximate, px).
+fn radial_residual(e: &Ellipse, p: Point) -> f64 {
+    let [cxx, cxy, cyy] = e.cov;
+    let det = cxx * cyy - cxy * cxy;
+    let (dx, dy) = (p[0] - e.centre[0], p[1] - e.centre[1]);
+    let m = (dx * dx * cyy - 2.0 * dx * dy * cxy + dy * dy * cxx) / det; // (d/σ)²
+    let r = dx.hypot(dy);
+    if m <= 0.0 {
+        return -r;
+    }
+    r - r * 2.0 / m.sqrt()
+}
+
+fn fit_once(points: &[Point]) -> Option<Ellipse> {
+    let n = points.len();
+    if n < 6 {
+        return None;
+    }
+    let mx = points.iter().map(|p| p[0]).sum::<f64>() / n as f64;
+    let my = points.iter().map(|p| p[1]).sum::<f64>() / n as f64;
+    let s = (points
+        .iter()
+        .map(|p| (p[0] - mx).powi(2) + (p[1] - my).powi(2))
+        .sum::<f64>()
+        / n as f64)
+        .sqrt();
+    if s <= 0.0 {
+        return None;
+    }
+    // a(x²−y²) + b·xy + d·x + e·y + f = −y²
+    let mut ata = [[0.0f64; 5]; 5];
+    let mut atb = [0.0f64; 5];
+    for p in points {
+        let (x, y) = ((p[0] - mx) / s, (p[1] - my) / s);
+        let row = [x * x - y * y, x * y, x, y, 1.0];
+        for i in 0..5 {
+            for j in 0..5 {
+                ata[i][j] += row[i] * row[j];
+            }
+            atb[i] += row[i] * (-y * y);
+        }
+    }
+    let sol = solve5(ata, atb)?;
+    let (a, b, d, e, f) = (sol[0], sol[1], sol[2], sol[3], sol[4]);
+    let c = 1.0 - a;
+    let det = 4.0 * a * c - b * b;
+    if det <= 0.0 {
+        return None; // not an ellipse
+    }
+    let x0 = (b * e - 2.0 * c * d) / det;
+    let y0 = (b * d - 2.0 * a * e) / det;
+    let k = a * x0 * x0 + b * x0 * y0 + c * y0 * y0 - f;
+    if k <= 0.0 {
+        return None;
+    }
+    // Σ = k/4 · A⁻¹, A = [[a, b/2], [b/2, c]], in normalised units.
+    let da = a * c - b * b / 4.0;
+    let q = k / 4.0 / da * s * s;
+    Some(Ellipse {
+        centre: [mx + x0 * s, my + y0 * s],
+        cov: [q * c, -q * b / 2.0, q * a],
+    })
+}
+
+fn solve5(mut a: [[f64; 5]; 5], mut b: [f64; 5]) -> Option<[f64; 5]> {
+    for col in 0..5 {
+        let piv = (col..5).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[piv][col].abs() < 1e-14 {
+            return None;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for r in 0..5 {
+            if r != col {
+                let f = a[r][col] / a[col][col];
+                let prow = a[col];
+                for (x, p) in a[r].iter_mut().zip(prow) {
+                    *x -= f * p;
+                }
+                b[r] -= f * b[col];
+            }
+        }
+    }
+    Some([0, 1, 2, 3, 4].map(|i| b[i] / a[i][i]))
+}
+
+/// Edge points of a dark mark on `RAYS` rays from `e.centre` (grid units).
+pub fn edge_points(g: &Gray<'_>, e: &Ellipse) -> Vec<Point> {
+    let [cxx, cxy, cyy] = e.cov;
+    let det = cxx * cyy - cxy * cxy;
+    let mut out = Vec::with_capacity(RAYS);
+    if det <= 0.0 {
+        return out;
+    }
+    let (ixx, ixy, iyy) = (cyy / det, -cxy / det, cxx / det);
+    let mut prof = Vec::with_capacity(1024);
+    'rays: for k in 0..RAYS {
+        let a = 2.0 * std::f64::consts::PI * (k as f64 + 0.5) / RAYS as f64;
+        let (ux, uy) = (a.cos(), a.sin());
+        let rho = 2.0 / (ux * ux * ixx + 2.0 * ux * uy * ixy + uy * uy * iyy).sqrt();
+        let step = (rho / 40.0).min(0.2);
+        let m = (1.75 * rho / step).ceil() as usize + 1;
+        prof.clear();
+        for i in 0..m {
+            let t = i as f64 * step;
+            match g.bilinear([e.centre[0] + t * ux, e.centre[1] + t * uy]) {
+                Some(v) => prof.push(v),
+                None => continue 'rays,
+            }
+        }
+        let idx = |t: f64| ((t / step).round() as usize).min(m - 1);
+        let (w0, w1) = (idx(1.4 * rho), idx(1.75 * rho));
+        let white = prof[w0..=w1].iter().sum::<f64>() / (w1 - w0 + 1) as f64;
+        // Dark level: mean of the darkest part of the mark on this ray.
+        let (d0, d1) = (idx(0.55 * rho), idx(0.85 * rho));
+        let dark = prof[d0..=d1].iter().sum::<f64>() / (d1 - d0 + 1) as f64;
+        if white - dark <= 0.0 {
+            continue;
+        }
+        let thr = 0.5 * (dark + white);
+        for i in (0..idx(1.35 * rho)).rev() {
+            if prof[i] < thr {
+                let (p0, p1) = (prof[i], prof[i + 1]);
+                let f = if p1 > p0 { (thr - p0) / (p1 - p0) } else { 0.5 };
+                let t = (i as f64 + f.clamp(0.0, 1.0)) * step;
+                out.push([e.centre[0] + t * ux, e.centre[1] + t * uy]);
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// Refines a mark's ellipse at full resolution (image px in, image px out).
+pub fn refine_mark(full: &Gray<'_>, centre_px: Point, cov_px2: [f64; 3]) -> Option<Ellipse> {
+    let s = full.scale;
+    let mut e = Ellipse {
+        centre: full.to_grid(centre_px),
+        cov: [
+            cov_px2[0] / (s[0] * s[0]),
+            cov_px2[1] / (s[0] * s[1]),
+            cov_px2[2] / (s[1] * s[1]),
+        ],
+    };
+    for _ in 0..3 {
+        let pts = edge_points(full, &e);
+        if pts.len() < RAYS / 2 {
+            return None;
+        }
+        let next = fit_ellipse(&pts)?;
+        let moved = (next.centre[0] - e.centre[0]).hypot(next.centre[1] - e.centre[1]);
+        e = next;
+        if moved < 0.01 {
+            break;
+        }
+    }
+    Some(Ellipse {
+        centre: full.to_img(e.centre),
+        cov: [
+            e.cov[0] * s[0] * s[0],
+            e.cov[1] * s[0] * s[1],
+            e.cov[2] * s[1] * s[1],
+        ],
+    })
+}
+
+type M3 = [[f64; 3]; 3];
+
+fn m3(h: &Homography) -> M3 {
+    let m = &h.m;
+    [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]]
+}
+
+fn mul(a: &M3, b: &M3) -> M3 {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
+
+fn transpose(a: &M3) -> M3 {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[i][j] = a[j][i];
+        }
+    }
+    c
+}
+
+/// Image position of the centre of the ellipse that a circle (centre, radius; mm) projects to.
+pub fn projected_circle_centre(h: &Homography, centre: Point, radius: f64) -> Option<Point> {
+    let inv = m3(&h.inverse()?);
+    let (x, y) = (centre[0], centre[1]);
+    let c: M3 = [
+        [1.0, 0.0, -x],
+        [0.0, 1.0, -y],
+        [-x, -y, x * x + y * y - radius * radius],
+    ];
+    let cp = mul(&transpose(&inv), &mul(&c, &inv));
+    let (a, b, cc, d, e) = (cp[0][0], cp[0][1], cp[1][1], cp[0][2], cp[1][2]);
+    let det = a * cc - b * b;
+    if det.abs() < 1e-300 {
+        return None;
+    }
+    Some([(-d * cc + e * b) / det, (-e * a + d * b) / det])
+}
+
+/// Measured centres corrected for the perspective shift, and the homography through them.
+fn solve_with_correction(
+    target: &Target,
+    marks: &[(usize, Point)],
+    mut h: Homography,
+) -> Option<Homography> {
+    // Go round the marks in the target's turning order (a quad must not cross itself).
+    let mut marks = marks.to_vec();
+    let pos = |fi: usize| [target.fiducials[fi].x_mm, target.fiducials[fi].y_mm];
+    let n = marks.len() as f64;
+    let cx = marks.iter().map(|m| pos(m.0)[0]).sum::<f64>() / n;
+    let cy = marks.iter().map(|m| pos(m.0)[1]).sum::<f64>() / n;
+    marks.sort_by(|a, b| {
+        let (pa, pb) = (pos(a.0), pos(b.0));
+        (pa[1] - cy)
+            .atan2(pa[0] - cx)
+            .total_cmp(&(pb[1] - cy).atan2(pb[0] - cx))
+    });
+    for _ in 0..3 {
+        let mut src = Vec::new();
+        let mut dst = Vec::new();
+        for &(fi, p) in &marks {
+            let f = &target.fiducials[fi];
+            let c = [f.x_mm, f.y_mm];
+            let shift = match projected_circle_centre(&h, c, f.diameter_mm / 2.0) {
+                Some(e) => {
+                    let hc = h.apply(c);
+                    [e[0] - hc[0], e[1] - hc[1]]
+                }
+                None => [0.0, 0.0],
+            };
+            src.push(c);
+            dst.push([p[0] - shift[0], p[1] - shift[1]]);
+        }
+        h = if marks.len() >= 4 {
+            Homography::from_quads(
+                &[src[0], src[1], src[2], src[3]],
+                &[dst[0], dst[1], dst[2], dst[3]],
+            )
+            .ok()?
+        } else {
+            affine3(&src, &dst)?
+        };
+    }
+    Some(h)
+}
+
+/// Looks for fiducial `fi` where `h` predicts it; its refined image centre when a mark
+/// of the predicted size and shape is there.
+fn recover_mark(full: &Gray<'_>, target: &Target, h: &Homography, fi: usize) -> Option<Point> {
+    let f = &target.fiducials[fi];
+    let c = [f.x_mm, f.y_mm];
+    let p = h.apply(c);
+    let j = h.jacobian(c);
+    let r2 = (f.diameter_mm / 2.0).powi(2) / 4.0;
+    let pred = [
+        r2 * (j[0][0] * j[0][0] + j[0][1] * j[0][1]),
+        r2 * (j[0][0] * j[1][0] + j[0][1] * j[1][1]),
+        r2 * (j[1][0] * j[1][0] + j[1][1] * j[1][1]),
+    ];
+    let s = full.scale;
+    let grid_cov = [
+        pred[0] / (s[0] * s[0]),
+        pred[1] / (s[0] * s[1]),
+        pred[2] / (s[1] * s[1]),
+    ];
+    // Where the mark must be, a dark blob of the right size with clear contrast will do
+    // (small rings often fail the blind disk test).
+    let t = super::blobs::ray_test(full, full.to_grid(p), grid_cov)?;
+    if t.contrast < 0.3 {
+        return None;
+    }
+    let e = refine_mark(full, p, pred)?;
+    let radius = (pred[0] + pred[2]).sqrt(); // ≈ the imaged radius
+    let moved = (e.centre[0] - p[0]).hypot(e.centre[1] - p[1]);
+    let size = ((e.cov[0] * e.cov[2] - e.cov[1] * e.cov[1])
+        / (pred[0] * pred[2] - pred[1] * pred[1]))
+        .sqrt();
+    (moved < 0.6 * radius + 1.0 && (0.6..=1.6).contains(&size)).then_some(e.centre)
+}
+
+/// Full-resolution refinement of a pick; `None` when the marks cannot be measured.
+pub fn finish(plane: &Plane, target: &Target, pick: &Pick, cands: &[Candidate]) -> Option<Located> {
+    let full = Gray::of_plane(plane);
+    let mut warnings = Vec::new();
+    let mut marks: Vec<(usize, Point)> = Vec::new();
+    for (&ci, &fi) in pick.cand_idx.iter().zip(&pick.fid_idx) {
+        let c = &cands[ci];
+        match refine_mark(&full, c.centre_px, c.cov_px2) {
+            Some(e) => marks.push((fi, e.centre)),
+            None => {
+                warnings.push(format!(
+                    "fiducial '{}': edge fit failed, using its blob centre",
+                    target.fiducials[fi].id
+                ));
+                marks.push((fi, c.centre_px));
+            }
+        }
+    }
+    let mut h = solve_with_correction(target, &marks, pick.homography)?;
+    let mut hidden = None;
+    if let Some(missing) = pick.hidden {
+        let id = target.fiducials[missing].id.clone();
+        let fixed: Vec<(Point, Point)> = marks
+            .iter()
+            .map(|&(fi, p)| {
+                let f = &target.fiducials[fi];
+                ([f.x_mm, f.y_mm], p)
+            })
+            .collect();
+        let edges = super::refine::fit_target_edges(&full, target, h, &fixed);
+        if let Some((h2, _)) = edges {
+            h = h2;
+        }
+        // The mark may be there but too small or faint for the blob search: look where
+        // the solution predicts it.
+        if let Some(p) = recover_mark(&full, target, &h, missing) {
+            marks.push((missing, p));
+            h = solve_with_correction(target, &marks, h)?;
+        } else {
+            match edges {
+                Some((_, n)) => warnings.push(format!(
+                    "fiducial '{id}' not seen (hidden or outside the frame): solved from the other {} marks and {n} edge points of the target",
+                    marks.len()
+                )),
+                None => warnings.push(format!(
+                    "fiducial '{id}' not seen (hidden or outside the frame): solved from the other {} marks assuming no perspective (affine); corners may be off under tilt",
+                    marks.len()
+                )),
+            }
+            hidden = Some(id);
+        }
+    }
+    let corners = rect_corners(0.0, 0.0, target.width_mm, target.height_mm).map(|c| h.apply(c));
+    if corners.iter().flatten().any(|v| !v.is_finite()) {
+        return None;
+    }
+    Some(Located {
+        homography: h,
+        corners_px: corners,
+        fiducials: marks
+            .iter()
+            .map(|&(fi, _)| {
+                let f = &target.fiducials[fi];
+                (f.id.clone(), h.apply([f.x_mm, f.y_mm]))
+            })
+            .collect(),
+        hidden,
+        warnings,
+        score: pick.score,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ellipse_fit_recovers_exact_ellipse() {
+        // Ellipse centre (10, -3), semi-axes 5 and 2, rotated 30°.
+        let (a, b, th) = (5.0f64, 2.0f64, 30f64.to_radians());
+        let pts: Vec<Point> = (0..40)
+            .map(|k| {
+                let t = k as f64 * 0.157;
+                let (x, y) = (a * t.cos(), b * t.sin());
+                [
+                    10.0 + x * th.cos() - y * th.sin(),
+                    -3.0 + x * th.sin() + y * th.cos(),
+                ]
+            })
+            .collect();
+        let e = fit_ellipse(&pts).unwrap();
+        assert!((e.centre[0] - 10.0).abs() < 1e-9 && (e.centre[1] + 3.0).abs() < 1e-9);
+        // σ² along the major axis = a²/4.
+        let tr = e.cov[0] + e.cov[2];
+        assert!((tr - (a * a + b * b) / 4.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn projected_circle_centre_matches_sampled_ellipse() {
+        let src = rect_corners(0.0, 0.0, 100.0, 60.0);
+        let dst = [[50.0, 40.0], [600.0, 90.0], [520.0, 420.0], [80.0, 330.0]];
+        let h = Homography::from_quads(&src, &dst).unwrap();
+        let (c, r) = ([12.0, 9.0], 4.0);
+        let pts: Vec<Point> = (0..200)
+            .map(|k| {
+                let t = k as f64 * std::f64::consts::TAU / 200.0;
+                h.apply([c[0] + r * t.cos(), c[1] + r * t.sin()])
+            })
+            .collect();
+        let fit = fit_ellipse(&pts).unwrap();
+        let pc = projected_circle_centre(&h, c, r).unwrap();
+        assert!((fit.centre[0] - pc[0]).abs() < 1e-6 && (fit.centre[1] - pc[1]).abs() < 1e-6);
+        // and it differs from the image of the centre under this perspective
+        let hc = h.apply(c);
+        assert!((pc[0] - hc[0]).hypot(pc[1] - hc[1]) > 1e-3);
+    }
+}

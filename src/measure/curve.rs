@@ -1,0 +1,211 @@
+//! From modulation samples to the MTF curve: image frequency from the fitted
+//! sweep law and the strip's local scale, aliasing flags (frequency outside
+//! the sampling lattice's band in the sweep's direction, or the image's local
+//! frequency departing from the law), normalisation by the chart's own
+//! modulation, and the summary figures (MTF50/30/10, MTF at Nyquist).
+
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
+use serde::{Deserialize, Serialize};
+
+/// One point of a measured MTF curve.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MtfPoint {
+    /// Position along the strip (strip units: mm on the chart with a target, else fraction of the strip).
+    pub s: f64,
+    /// Image frequency (cycles/pixel).
+    pub freq_cy_px: f64,
+    /// Chart frequency (cycles per strip unit: cycles/mm with a target).
+    pub freq_chart: f64,
+    /// Measured modulation of the image (amplitude / mean, linear light).
+    pub modulation: f64,
+    /// MTF = modulation / chart modulation.
+    pub mtf: f64,
+    /// One-sigma uncertainty of the MTF.
+    pub mtf_err: f64,
+    /// True where the frequency is aliased: the value is not an MTF.
+    pub aliased: bool,
+}
+
+/// Summary figures of one curve (cycles/pixel).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Figures {
+    /// Frequency where the MTF first falls to 0.5.
+    pub mtf50_cy_px: Option<f64>,
+    /// Frequency where the MTF first falls to 0.3.
+    pub mtf30_cy_px: Option<f64>,
+    /// Frequency where the MTF first falls to 0.1.
+    pub mtf10_cy_px: Option<f64>,
+    /// MTF at the Nyquist frequency, 0.5 cycles/pixel (None when not measured or aliased there).
+    pub mtf_nyquist: Option<f64>,
+}
+
+/// Whether frequency `f` (cycles/pixel) in direction `angle` (radians) lies outside the
+/// band of a sampling lattice with steps (sx, sy) pixels.
+pub fn outside_band(f: f64, angle: f64, step: (usize, usize)) -> bool {
+    (f * angle.cos()).abs() * step.0 as f64 > 0.5 + 1e-9
+        || (f * angle.sin()).abs() * step.1 as f64 > 0.5 + 1e-9
+}
+
+/// Estimates the chart's modulation by extrapolating the low-frequency end of the
+/// (non-aliased) modulation curve to zero frequency with a weighted quadratic
+/// in frequency. Returns the value and the range used (cycles/pixel).
+pub fn extrapolate_chart_modulation(points: &[MtfPoint]) -> Result<(f64, f64, f64), String> {
+    let mut pts: Vec<&MtfPoint> = points
+        .iter()
+        .filter(|p| !p.aliased && p.modulation.is_finite())
+        .collect();
+    pts.sort_by(|a, b| a.freq_cy_px.total_cmp(&b.freq_cy_px));
+    let Some(first) = pts.first() else {
+        return Err("no modulation measured".into());
+    };
+    let f_lo = first.freq_cy_px;
+    if f_lo > 0.08 {
+        return Err(format!(
+            "the sweep starts at {f_lo:.3} cy/px, too high to extrapolate to zero frequency; \
+             give --target with the printed contrast or a region that starts below 0.08 cy/px"
+        ));
+    }
+    let f_hi = (f_lo + 0.05).max(2.0 * f_lo);
+    let mut sel: Vec<&MtfPoint> = pts
+        .iter()
+        .copied()
+        .filter(|p| p.freq_cy_px <= f_hi)
+        .collect();
+    if sel.len() < 6 {
+        sel = pts.iter().copied().take(6).collect();
+    }
+    if sel.len() < 4 {
+        return Err("too few low-frequency points to extrapolate to zero frequency".into());
+    }
+    let f_top = sel.last().map(|p| p.freq_cy_px).unwrap_or(f_hi);
+    // Weighted least squares M = a + b f + c f², using the modulation's own uncertainty.
+    let mut m = [[0.0f64; 3]; 3];
+    let mut r = [0.0f64; 3];
+    for p in &sel {
+        let e = (p.mtf_err * p.modulation / p.mtf.max(1e-12)).abs();
+        let w = 1.0 / (e * e + 1e-8);
+        let x = [1.0, p.freq_cy_px / f_top, (p.freq_cy_px / f_top).powi(2)];
+        for i in 0..3 {
+            r[i] += w * x[i] * p.modulation;
+            for j in 0..3 {
+                m[i][j] += w * x[i] * x[j];
+            }
+        }
+    }
+    let a = solve3(m, r).ok_or("the low-frequency points do not determine a curve")?[0];
+    if !(a > 0.0 && a.is_finite()) {
+        return Err("the extrapolated chart modulation is not positive".into());
+    }
+    Ok((a, f_lo, f_top))
+}
+
+fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
+    for col in 0..3 {
+        let piv = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[piv][col].abs() < 1e-300 {
+            return None;
+        }
+        a.swap(col, piv);
+        r.swap(col, piv);
+        for row in 0..3 {
+            if row != col {
+                let f = a[row][col] / a[col][col];
+                for j in 0..3 {
+                    a[row][j] -= f * a[col][j];
+                }
+                r[row] -= f * r[col];
+            }
+        }
+    }
+    Some([r[0] / a[0][0], r[1] / a[1][1], r[2] / a[2][2]])
+}
+
+/// The frequency where the (non-aliased) curve first falls through `level`, by linear interpolation.
+pub fn crossing(points: &[MtfPoint], level: f64) -> Option<f64> {
+    let pts: Vec<&MtfPoint> = points.iter().filter(|p| !p.aliased).collect();
+    // Smooth lightly (3-point running mean) so one noisy point does not decide.
+    let sm: Vec<f64> = (0..pts.len())
+        .map(|i| {
+            let a = i.saturating_sub(1);
+            let b = (i + 2).min(pts.len());
+            pts[a..b].iter().map(|p| p.mtf).sum::<f64>() / (b - a) as f64
+        })
+        .collect();
+    for i in 1..pts.len() {
+        if sm[i - 1] >= level && sm[i] < level {
+            let t = (sm[i - 1] - level) / (sm[i - 1] - sm[i]);
+            return Some(pts[i - 1].freq_cy_px + t * (pts[i].freq_cy_px - pts[i - 1].freq_cy_px));
+        }
+    }
+    None
+}
+
+/// The (non-aliased) MTF at frequency `f`, by linear interpolation; None outside the measured range.
+pub fn mtf_at(points: &[MtfPoint], f: f64) -> Option<f64> {
+    let pts: Vec<&MtfPoint> = points.iter().filter(|p| !p.aliased).collect();
+    pts.windows(2).find_map(|w| {
+        let (a, b) = (w[0], w[1]);
+        (a.freq_cy_px <= f && f <= b.freq_cy_px && b.freq_cy_px > a.freq_cy_px)
+            .then(|| a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px))
+    })
+}
+
+/// MTF50, MTF30, MTF10 and MTF at Nyquist of a curve.
+pub fn figures(points: &[MtfPoint]) -> Figures {
+    Figures {
+        mtf50_cy_px: crossing(points, 0.5),
+        mtf30_cy_px: crossing(points, 0.3),
+        mtf10_cy_px: crossing(points, 0.1),
+        mtf_nyquist: mtf_at(points, 0.5),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(m0: f64, f: impl Fn(f64) -> f64) -> Vec<MtfPoint> {
+        (0..200)
+            .map(|i| {
+                let fr = 0.005 + i as f64 * 0.0025;
+                MtfPoint {
+                    s: i as f64,
+                    freq_cy_px: fr,
+                    freq_chart: fr,
+                    modulation: m0 * f(fr),
+                    mtf: f(fr),
+                    mtf_err: 0.001,
+                    aliased: fr > 0.5,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn extrapolates_gaussian_and_diffraction_like_curves() {
+        let sigma: f64 = 0.9;
+        let gauss = |f: f64| (-2.0 * std::f64::consts::PI.powi(2) * sigma * sigma * f * f).exp();
+        let (a, _, _) = extrapolate_chart_modulation(&curve(0.8, gauss)).unwrap();
+        assert!((a - 0.8).abs() < 0.8 * 1e-3, "{a}");
+        // Diffraction (circular pupil), cutoff 0.9 cy/px: non-zero slope at 0.
+        let diff = |f: f64| {
+            let x: f64 = f / 0.9;
+            2.0 / std::f64::consts::PI * (x.acos() - x * (1.0 - x * x).sqrt())
+        };
+        let (a, _, _) = extrapolate_chart_modulation(&curve(0.6, diff)).unwrap();
+        assert!((a - 0.6).abs() < 0.6 * 1e-3, "{a}");
+    }
+
+    #[test]
+    fn crossings_and_nyquist() {
+        let lin = curve(1.0, |f| 1.0 - 1.2 * f);
+        let f = figures(&lin);
+        assert!((f.mtf50_cy_px.unwrap() - 0.5 / 1.2).abs() < 0.003);
+        assert!(f.mtf10_cy_px.is_none()); // would be at 0.75 cy/px, beyond the non-aliased range
+        assert!((f.mtf_nyquist.unwrap() - 0.4).abs() < 1e-9);
+        assert!(outside_band(0.6, 0.0, (1, 1)));
+        assert!(!outside_band(0.6, std::f64::consts::FRAC_PI_4, (1, 1)));
+        assert!(outside_band(0.3, 0.0, (2, 2)));
+    }
+}

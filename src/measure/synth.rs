@@ -1,0 +1,219 @@
+//! A small reference renderer for tests and the accuracy report, independent
+//! of the measurement code: a sine sweep strip seen through a homography and
+//! blurred by an isotropic Gaussian of known σ, whose MTF exp(−2π²σ²f²) is the
+//! truth. The blur is applied analytically as a locally plane wave (the
+//! sweep's local frequency vector at each pixel centre, from the exact
+//! derivative of the chart coordinate), then optional shot and read noise,
+//! the sRGB curve, 8-bit quantisation and optional JPEG compression.
+//!
+//! The full camera simulator (`crate::simulate`) supersedes this for optics
+//! and sensor effects; this renderer only needs to be exact for a Gaussian.
+
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
+use super::law::PhaseLaw;
+use crate::geometry::{Homography, Point, rect_corners};
+use crate::photo::linearise::linear_to_srgb;
+use std::f64::consts::PI;
+use std::io::Cursor;
+
+/// A synthetic shot of one sweep strip.
+#[derive(Debug, Clone)]
+pub struct SynthShot {
+    /// Name of the case.
+    pub name: String,
+    /// Image size (pixels).
+    pub width: usize,
+    /// Image height (pixels).
+    pub height: usize,
+    /// Strip corners in the image (corners 1 and 4 on the low-frequency edge).
+    pub quad: [Point; 4],
+    /// Strip length and width (strip units).
+    pub length: f64,
+    /// Strip width (strip units).
+    pub strip_width: f64,
+    /// Phase law in strip units.
+    pub law: PhaseLaw,
+    /// Mean linear level (0–1).
+    pub mean: f64,
+    /// Printed modulation (0–1].
+    pub contrast: f64,
+    /// Gaussian blur σ (pixels).
+    pub sigma_px: f64,
+    /// Electrons at linear level 1 (shot noise), and read noise (electrons); None = noiseless.
+    pub noise: Option<(f64, f64)>,
+    /// JPEG quality; None = lossless PNG.
+    pub jpeg_quality: Option<u8>,
+}
+
+impl SynthShot {
+    /// The true MTF at `f` cycles/pixel.
+    pub fn truth(&self, f: f64) -> f64 {
+        (-2.0 * PI * PI * self.sigma_px * self.sigma_px * f * f).exp()
+    }
+
+    fn homography(&self) -> Homography {
+        Homography::from_quads(
+            &rect_corners(0.0, 0.0, self.length, self.strip_width),
+            &self.quad,
+        )
+        .expect("synthetic quads are valid")
+    }
+
+    /// True image frequency (cycles/pixel) at distance `s` along the strip's centre line.
+    pub fn freq_px_at(&self, s: f64) -> f64 {
+        let inv = self.homography().inverse().expect("invertible");
+        let p = self.homography().apply([s, 0.5 * self.strip_width]);
+        let j = inv.jacobian(p);
+        self.law.freq(s) * j[0][0].hypot(j[0][1])
+    }
+
+    /// Renders linear values (no noise, no encoding), row-major.
+    pub fn render_linear(&self) -> Vec<f64> {
+        let inv = self.homography().inverse().expect("invertible");
+        let mut out = vec![self.mean; self.width * self.height];
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let p = [x as f64 + 0.5, y as f64 + 0.5];
+                let q = inv.apply(p);
+                let (s, t) = (q[0], q[1]);
+                if !(0.0..=self.length).contains(&s) || !(0.0..=self.strip_width).contains(&t) {
+                    continue;
+                }
+                let j = inv.jacobian(p);
+                let f = self.law.freq(s) * j[0][0].hypot(j[0][1]);
+                let m = self.contrast * self.truth(f);
+                out[y * self.width + x] =
+                    self.mean * (1.0 + m * (2.0 * PI * self.law.phase(s)).cos());
+            }
+        }
+        out
+    }
+
+    /// Renders the shot and encodes it (8-bit sRGB grey PNG, or RGB JPEG); `seed` drives the noise.
+    pub fn encode(&self, seed: u64) -> Vec<u8> {
+        let lin = self.render_linear();
+        let mut st = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
+        let codes: Vec<u8> = lin
+            .iter()
+            .map(|&v| {
+                let v = match self.noise {
+                    Some((full, read)) => {
+                        let e = v * full;
+                        (e + (e.max(0.0) + read * read).sqrt() * normal(&mut st)) / full
+                    }
+                    None => v,
+                };
+                (255.0 * linear_to_srgb(v.clamp(0.0, 1.0))).round() as u8
+            })
+            .collect();
+        let mut buf = Cursor::new(Vec::new());
+        let (w, h) = (self.width as u32, self.height as u32);
+        match self.jpeg_quality {
+            None => {
+                let img = image::GrayImage::from_raw(w, h, codes).expect("size");
+                img.write_to(&mut buf, image::ImageFormat::Png)
+                    .expect("PNG encoding in memory");
+            }
+            Some(q) => {
+                let rgb: Vec<u8> = codes.iter().flat_map(|&c| [c, c, c]).collect();
+                let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut buf, q);
+                enc.encode(&rgb, w, h, image::ExtendedColorType::Rgb8)
+                    .expect("JPEG encoding in memory");
+            }
+        }
+        buf.into_inner()
+    }
+}
+
+/// A deterministic standard normal (LCG + Box–Muller).
+fn normal(state: &mut u64) -> f64 {
+    let mut u = || {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    let (a, b) = (u(), u());
+    (-2.0 * a.ln()).sqrt() * (2.0 * PI * b).cos()
+}
+
+/// A strip of `len`×`wid` pixels centred at (cx, cy), turned by `rot_deg`, with its far
+/// (high-frequency) end tilted away: `tilt_deg` foreshortens the strip progressively
+/// like a chart turned about its vertical axis.
+pub fn strip_quad(cx: f64, cy: f64, len: f64, wid: f64, rot_deg: f64, tilt_deg: f64) -> [Point; 4] {
+    // Perspective: the far end shrinks by cos(tilt)-like factor.
+    let k = 1.0 - 0.5 * tilt_deg.to_radians().sin();
+    let pts = [
+        [-len / 2.0, -wid / 2.0],
+        [len / 2.0 * k.sqrt(), -wid / 2.0 * k],
+        [len / 2.0 * k.sqrt(), wid / 2.0 * k],
+        [-len / 2.0, wid / 2.0],
+    ];
+    let (c, s) = (rot_deg.to_radians().cos(), rot_deg.to_radians().sin());
+    pts.map(|[x, y]| [cx + c * x - s * y, cy + s * x + c * y])
+}
+
+/// The fixed set of cases of the accuracy report: (name, shot).
+pub fn standard_cases() -> Vec<SynthShot> {
+    use super::law::LawKind;
+    let len = 1800.0;
+    // Log sweep 0.004 → 0.6 cycles per unit over the strip (units ≈ pixels when not tilted).
+    let k = (0.6f64 / 0.004).ln() / len;
+    let law = PhaseLaw {
+        kind: LawKind::Log,
+        c0: 0.0,
+        c1: 0.004,
+        c2: k,
+    };
+    let base = SynthShot {
+        name: "noiseless".into(),
+        width: 1900,
+        height: 200,
+        quad: strip_quad(950.0, 100.0, len, 120.0, 0.0, 0.0),
+        length: len,
+        strip_width: 120.0,
+        law,
+        mean: 0.45,
+        contrast: 0.8,
+        sigma_px: 0.8,
+        noise: None,
+        jpeg_quality: None,
+    };
+    let noisy = |name: &str, rot: f64, tilt: f64| {
+        let big = rot.abs() > 1.0 || tilt > 1.0;
+        let (w, h) = if big { (1900, 1400) } else { (1900, 200) };
+        SynthShot {
+            name: name.into(),
+            width: w,
+            height: h,
+            quad: strip_quad(
+                w as f64 / 2.0,
+                h as f64 / 2.0,
+                if big { 1500.0 } else { len },
+                120.0,
+                rot,
+                tilt,
+            ),
+            // SNR ≈ 50 at the mean level: 0.45·full/√(0.45·full) = 50 → full ≈ 5560 e⁻.
+            noise: Some((5560.0, 3.0)),
+            jpeg_quality: Some(90),
+            ..base.clone()
+        }
+    };
+    vec![
+        base.clone(),
+        noisy("snr50_jpeg90", 0.0, 0.0),
+        noisy("rot20_snr50_jpeg90", 20.0, 0.0),
+        noisy("rot45_snr50_jpeg90", 45.0, 0.0),
+        noisy("tilt30_rot10_snr50_jpeg90", 10.0, 30.0),
+        SynthShot {
+            name: "dark_c0.2_noisy".into(),
+            mean: 0.08,
+            contrast: 0.2,
+            noise: Some((5560.0, 3.0)),
+            jpeg_quality: Some(90),
+            ..base.clone()
+        },
+    ]
+}

@@ -1,0 +1,329 @@
+//! Linearisation: code values → linear light, and the choice of channel.
+//!
+//! 8-bit data goes through the sRGB curve by default, 16-bit data is taken as
+//! linear (with a notice), `--gamma G` applies a power law, and `--tone chart`
+//! uses a tone curve measured from the target's grey patches in the same shot
+//! ([`ToneCurve::from_patches`]). Every tone is applied through a lookup table
+//! (256 or 65536 entries), and only over the requested crop, so that a large
+//! photo is never converted to floating point as a whole. The channel is the
+//! luminance of linear RGB (Rec. 709 weights), one of r, g, b, or all three.
+
+use super::Plane;
+use super::decode::{Decoded, Samples};
+use serde::{Deserialize, Serialize};
+
+/// Rec. 709 / sRGB luminance weights of linear R, G, B.
+pub const LUMA_WEIGHTS: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
+/// How code values map to linear light.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tone {
+    /// The sRGB transfer curve (IEC 61966-2-1).
+    Srgb,
+    /// A power law: linear = code^gamma (code scaled to 0–1); gamma 1 = already linear.
+    Gamma(f64),
+    /// A measured curve (from grey patches): code → linear, piecewise linear.
+    Curve(ToneCurve),
+}
+
+/// A monotone, piecewise-linear tone curve: code value (0–1) → linear reflectance.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ToneCurve {
+    /// Code values (0–1), strictly increasing.
+    pub code: Vec<f64>,
+    /// Linear values at those codes (non-decreasing).
+    pub linear: Vec<f64>,
+}
+
+/// Which channel of a colour photo is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Channel {
+    /// Luminance of linear RGB (Rec. 709 weights).
+    #[default]
+    Luma,
+    /// Red.
+    R,
+    /// Green.
+    G,
+    /// Blue.
+    B,
+    /// One plane per colour channel.
+    All,
+}
+
+impl Channel {
+    /// Parses `luma|r|g|b|all`.
+    pub fn parse(s: &str) -> Option<Channel> {
+        Some(match s.to_ascii_lowercase().as_str() {
+            "luma" | "y" | "luminance" => Channel::Luma,
+            "r" | "red" => Channel::R,
+            "g" | "green" => Channel::G,
+            "b" | "blue" => Channel::B,
+            "all" => Channel::All,
+            _ => return None,
+        })
+    }
+}
+
+/// A pixel rectangle [x0, x1) × [y0, y1) of the image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Crop {
+    /// First column.
+    pub x0: usize,
+    /// First row.
+    pub y0: usize,
+    /// One past the last column.
+    pub x1: usize,
+    /// One past the last row.
+    pub y1: usize,
+}
+
+/// sRGB decoding curve: encoded value (0–1) → linear.
+pub fn srgb_to_linear(v: f64) -> f64 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// sRGB encoding curve: linear (0–1) → encoded value.
+pub fn linear_to_srgb(v: f64) -> f64 {
+    if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The default tone for data of `bits` bits per sample, and a notice when the choice is a guess.
+pub fn default_tone(bits: u32) -> (Tone, Option<String>) {
+    if bits > 8 {
+        (
+            Tone::Gamma(1.0),
+            Some(format!(
+                "{bits}-bit data taken as linear (use --gamma or --tone chart if it is not)"
+            )),
+        )
+    } else {
+        (Tone::Srgb, None)
+    }
+}
+
+impl Tone {
+    /// Linear value of a code value scaled to 0–1.
+    pub fn apply(&self, code: f64) -> f64 {
+        match self {
+            Tone::Srgb => srgb_to_linear(code),
+            Tone::Gamma(g) => code.max(0.0).powf(*g),
+            Tone::Curve(c) => c.apply(code),
+        }
+    }
+
+    /// A lookup table of `levels` entries (256 or 65536): code index → linear value.
+    pub fn lut(&self, levels: usize) -> Vec<f32> {
+        let top = (levels - 1) as f64;
+        (0..levels)
+            .map(|i| self.apply(i as f64 / top) as f32)
+            .collect()
+    }
+}
+
+impl ToneCurve {
+    /// Builds a curve from (code 0–1, known linear reflectance) pairs of grey patches.
+    ///
+    /// Pairs are sorted by code; a reflectance that falls while the code rises
+    /// is pooled with its neighbour (pool-adjacent-violators) so the curve is
+    /// monotone. Needs at least two distinct codes.
+    pub fn from_patches(pairs: &[(f64, f64)]) -> Result<ToneCurve, String> {
+        let mut p: Vec<(f64, f64)> = pairs
+            .iter()
+            .copied()
+            .filter(|(c, r)| c.is_finite() && r.is_finite())
+            .collect();
+        p.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Merge equal codes.
+        let mut blocks: Vec<(f64, f64, f64)> = Vec::new(); // (sum code, sum refl, n)
+        for (c, r) in p {
+            match blocks.last_mut() {
+                Some(b) if (b.0 / b.2 - c).abs() < 1e-9 => {
+                    b.0 += c;
+                    b.1 += r;
+                    b.2 += 1.0;
+                }
+                _ => blocks.push((c, r, 1.0)),
+            }
+            // Pool adjacent violators.
+            while blocks.len() >= 2 {
+                let n = blocks.len();
+                let (a, b) = (blocks[n - 2], blocks[n - 1]);
+                if b.1 / b.2 < a.1 / a.2 {
+                    blocks[n - 2] = (a.0 + b.0, a.1 + b.1, a.2 + b.2);
+                    blocks.pop();
+                } else {
+                    break;
+                }
+            }
+        }
+        if blocks.len() < 2 {
+            return Err("the grey patches give fewer than two distinct levels".into());
+        }
+        Ok(ToneCurve {
+            code: blocks.iter().map(|b| b.0 / b.2).collect(),
+            linear: blocks.iter().map(|b| b.1 / b.2).collect(),
+        })
+    }
+
+    /// Linear value at a code (0–1): linear interpolation, linear extrapolation beyond the ends, never below 0.
+    pub fn apply(&self, code: f64) -> f64 {
+        let n = self.code.len();
+        let k = match self.code.iter().position(|&c| c > code) {
+            Some(0) => 0,
+            Some(i) => i - 1,
+            None => n - 2,
+        }
+        .min(n - 2);
+        let (c0, c1) = (self.code[k], self.code[k + 1]);
+        let (l0, l1) = (self.linear[k], self.linear[k + 1]);
+        (l0 + (l1 - l0) * (code - c0) / (c1 - c0)).max(0.0)
+    }
+}
+
+/// Names of the planes [`planes`] returns for a channel choice on data with `channels` samples per pixel.
+pub fn plane_names(channel: Channel, channels: usize) -> Vec<&'static str> {
+    match (channel, channels) {
+        (_, 1) => vec!["grey"],
+        (Channel::Luma, _) => vec!["luma"],
+        (Channel::R, _) => vec!["r"],
+        (Channel::G, _) => vec!["g"],
+        (Channel::B, _) => vec!["b"],
+        (Channel::All, _) => vec!["r", "g", "b"],
+    }
+}
+
+/// Linear planes of the crop, one per name of [`plane_names`] (a grey photo gives one plane for any channel).
+pub fn planes(dec: &Decoded, crop: Crop, tone: &Tone, channel: Channel) -> Vec<Plane> {
+    planes_within(dec, crop, tone, channel, &|_| (crop.x0, crop.x1))
+}
+
+/// Like [`planes`], but converts only the columns `span(y)` = [x0, x1) of each
+/// image row y (the rest of the crop stays 0): a rotated region's bounding box
+/// is mostly outside it, and conversion is the largest cost after decoding.
+pub fn planes_within(
+    dec: &Decoded,
+    crop: Crop,
+    tone: &Tone,
+    channel: Channel,
+    span: &dyn Fn(usize) -> (usize, usize),
+) -> Vec<Plane> {
+    let (w, h) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
+    let levels = match dec.samples {
+        Samples::U8(_) => 256,
+        Samples::U16(_) => 65536,
+    };
+    let lut = tone.lut(levels);
+    let code = |x: usize, y: usize, c: usize| -> usize {
+        let i = (y * dec.width + x) * dec.channels + c;
+        match &dec.samples {
+            Samples::U8(v) => v[i] as usize,
+            Samples::U16(v) => v[i] as usize,
+        }
+    };
+    let cols = |y: usize| {
+        let (a, b) = span(y);
+        (a.clamp(crop.x0, crop.x1), b.clamp(crop.x0, crop.x1))
+    };
+    let fill = |value: &dyn Fn(usize, usize) -> f32| -> Vec<f32> {
+        let mut out = vec![0f32; w * h];
+        for y in crop.y0..crop.y1 {
+            let (a, b) = cols(y);
+            let row = &mut out[(y - crop.y0) * w..(y - crop.y0 + 1) * w];
+            for x in a..b {
+                row[x - crop.x0] = value(x, y);
+            }
+        }
+        out
+    };
+    let wrap = |data: Vec<f32>| Plane {
+        width: w,
+        height: h,
+        step: (1, 1),
+        offset: (crop.x0, crop.y0),
+        data,
+    };
+    let one = |c: usize| wrap(fill(&|x, y| lut[code(x, y, c)]));
+    if dec.channels == 1 {
+        return vec![one(0)];
+    }
+    match channel {
+        Channel::R => vec![one(0)],
+        Channel::G => vec![one(1)],
+        Channel::B => vec![one(2)],
+        Channel::All => (0..3).map(one).collect(),
+        Channel::Luma => vec![wrap(fill(&|x, y| {
+            LUMA_WEIGHTS[0] * lut[code(x, y, 0)]
+                + LUMA_WEIGHTS[1] * lut[code(x, y, 1)]
+                + LUMA_WEIGHTS[2] * lut[code(x, y, 2)]
+        }))],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_matches_published_values() {
+        // IEC 61966-2-1 reference points: code 0.5 → 0.2140, 128/255 → 0.21586.
+        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-6);
+        assert!((srgb_to_linear(128.0 / 255.0) - 0.215_861).abs() < 1e-6);
+        assert_eq!(srgb_to_linear(1.0), 1.0);
+        for v in [0.001, 0.02, 0.3, 0.9] {
+            assert!((linear_to_srgb(srgb_to_linear(v)) - v).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn luma_and_channels_of_a_crop() {
+        let dec = Decoded {
+            width: 3,
+            height: 2,
+            channels: 3,
+            samples: Samples::U8(vec![
+                255, 0, 0, 0, 255, 0, 0, 0, 255, //
+                255, 255, 255, 0, 0, 0, 128, 128, 128,
+            ]),
+            format: "png",
+        };
+        let crop = Crop {
+            x0: 1,
+            y0: 0,
+            x1: 3,
+            y1: 2,
+        };
+        let p = planes(&dec, crop, &Tone::Srgb, Channel::Luma);
+        assert_eq!(p.len(), 1);
+        assert_eq!((p[0].width, p[0].height, p[0].offset), (2, 2, (1, 0)));
+        assert!((p[0].get(0, 0) - 0.7152).abs() < 1e-6);
+        assert!((p[0].get(1, 0) - 0.0722).abs() < 1e-6);
+        assert!((p[0].get(1, 1) - 0.215_861).abs() < 1e-5);
+        assert_eq!(p[0].centre(1, 1), (2.5, 1.5));
+        let all = planes(&dec, crop, &Tone::Gamma(1.0), Channel::All);
+        assert_eq!(all.len(), 3);
+        assert_eq!(all[2].get(1, 0), 1.0);
+    }
+
+    #[test]
+    fn tone_curve_is_monotone_and_interpolates() {
+        let c =
+            ToneCurve::from_patches(&[(0.8, 0.7), (0.2, 0.1), (0.5, 0.3), (0.55, 0.25)]).unwrap();
+        assert!(c.linear.windows(2).all(|w| w[1] >= w[0]));
+        assert!((c.apply(0.2) - 0.1).abs() < 1e-12);
+        assert!((c.apply(0.8) - 0.7).abs() < 1e-12);
+        assert!(c.apply(0.0) >= 0.0);
+        assert!(c.apply(1.0) > 0.7);
+        assert!(ToneCurve::from_patches(&[(0.5, 0.2)]).is_err());
+    }
+}

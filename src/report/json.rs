@@ -1,0 +1,91 @@
+//! The JSON summary of a measurement: MTF50/30/10 in every known unit, MTF at
+//! Nyquist, method, chart modulation and its source, warnings, timings.
+
+use super::csv::lw_ph;
+use crate::measure::Measurement;
+use serde_json::{Value, json};
+
+/// Wall-clock timings measured by the caller (the library never reads the clock).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Timings {
+    /// Reading, decoding and measuring the photo (ms).
+    pub measure_ms: f64,
+    /// Whole run including output (ms).
+    pub total_ms: f64,
+}
+
+fn freq(f: Option<f64>, m: &Measurement) -> Value {
+    match f {
+        None => Value::Null,
+        Some(f) => {
+            let mut o = json!({ "cy_px": f, "lw_ph": lw_ph(f, m.image_height) });
+            if let Some(p) = m.pixel_pitch_mm {
+                o["cy_mm"] = json!(f / p);
+            }
+            o
+        }
+    }
+}
+
+/// The summary as a JSON value.
+pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
+    let curves: Vec<Value> = m
+        .curves
+        .iter()
+        .map(|c| {
+            json!({
+                "channel": c.channel,
+                "sweep": c.sweep_id,
+                "mtf50": freq(c.figures.mtf50_cy_px, m),
+                "mtf30": freq(c.figures.mtf30_cy_px, m),
+                "mtf10": freq(c.figures.mtf10_cy_px, m),
+                "mtf_at_nyquist": c.figures.mtf_nyquist,
+                "chart_modulation": c.chart_modulation,
+                "chart_modulation_source": c.chart_modulation_source,
+                "aliasing_from_cy_px": c.aliasing_from_cy_px,
+                "clipped_fraction": c.clipped_fraction,
+                "points": c.points.len(),
+                "points_aliased": c.points.iter().filter(|p| p.aliased).count(),
+                "sweep_law": {
+                    "kind": c.law.kind,
+                    "strip_unit": c.strip_unit,
+                    "phase_c0_cycles": c.law.c0,
+                    "freq_start_cy_per_unit": c.law.c1,
+                    "c2": c.law.c2,
+                },
+            })
+        })
+        .collect();
+    let patches: Vec<Value> = m
+        .patches
+        .iter()
+        .map(|p| serde_json::to_value(p).unwrap_or(Value::Null))
+        .collect();
+    let mut v = json!({
+        "source": m.source,
+        "image_width_px": m.image_width,
+        "image_height_px": m.image_height,
+        "bits_per_sample": m.bits,
+        "method": m.method.name(),
+        "tone": m.tone,
+        "pixel_pitch_um": m.pixel_pitch_mm.map(|p| p * 1e3),
+        "roi_px": m.roi,
+        "curves": curves,
+        "patches": patches,
+        "warnings": m.warnings,
+    });
+    if let Some(t) = t {
+        v["timings_ms"] = json!({
+            "decode_and_measure": t.measure_ms,
+            "total": t.total_ms,
+        });
+    }
+    v
+}
+
+/// The summary as pretty-printed JSON bytes.
+pub fn summary_json(m: &Measurement, t: Option<Timings>) -> Vec<u8> {
+    let mut s = serde_json::to_string_pretty(&summary(m, t)).unwrap_or_default();
+    s.push('\n');
+    s.into_bytes()
+}

@@ -1,0 +1,215 @@
+//! The MTF plot: each curve with its ±1σ error band, aliased points in grey,
+//! the Nyquist frequency and MTF50 marked; sine patches as points with error
+//! bars. PNG or SVG.
+
+use super::atomic::ReportError;
+use crate::measure::Measurement;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// Plot output format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlotFormat {
+    /// PNG raster.
+    Png,
+    /// SVG vector.
+    Svg,
+}
+
+const W: u32 = 1000;
+const H: u32 = 620;
+const COLOURS: [RGBColor; 4] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+];
+
+fn err(e: impl std::fmt::Display) -> ReportError {
+    ReportError::Plot {
+        what: "the MTF plot".into(),
+        cause: e.to_string(),
+    }
+}
+
+/// Renders the MTF plot to bytes (PNG or SVG).
+pub fn mtf_plot(m: &Measurement, format: PlotFormat) -> Result<Vec<u8>, ReportError> {
+    crate::plot::ensure_font();
+    match format {
+        PlotFormat::Svg => {
+            let mut s = String::new();
+            {
+                let root = SVGBackend::with_string(&mut s, (W, H)).into_drawing_area();
+                draw(&root, m)?;
+                root.present().map_err(err)?;
+            }
+            Ok(s.into_bytes())
+        }
+        PlotFormat::Png => {
+            let mut buf = vec![255u8; (W * H * 3) as usize];
+            {
+                let root = BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area();
+                draw(&root, m)?;
+                root.present().map_err(err)?;
+            }
+            super::roi_plot::encode_png(buf, W, H)
+        }
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    m: &Measurement,
+) -> Result<(), ReportError>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(err)?;
+    let fmax_data = m
+        .curves
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| p.freq_cy_px))
+        .chain(m.patches.iter().map(|p| p.freq_cy_px))
+        .fold(0.0, f64::max);
+    let xmax = (fmax_data * 1.02).clamp(0.55, 1.0);
+    let ymax = m
+        .curves
+        .iter()
+        .flat_map(|c| c.points.iter().filter(|p| !p.aliased).map(|p| p.mtf))
+        .chain(m.patches.iter().map(|p| p.mtf))
+        .fold(1.05, f64::max)
+        .min(1.6);
+    let name = std::path::Path::new(&m.source)
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let title = format!("MTF of {name} ({} method)", m.method.name());
+    let xlabel = match m.pixel_pitch_mm {
+        Some(p) => format!(
+            "spatial frequency (cycles/pixel; 0.5 cy/px = {:.1} lp/mm at {:.2} µm pitch)",
+            0.5 / p,
+            p * 1e3
+        ),
+        None => "spatial frequency (cycles/pixel)".to_string(),
+    };
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (crate::plot::FONT, 22))
+        .margin(14)
+        .x_label_area_size(46)
+        .y_label_area_size(56)
+        .build_cartesian_2d(0.0..xmax, 0.0..ymax)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(xlabel)
+        .y_desc("MTF")
+        .label_style((crate::plot::FONT, 15))
+        .axis_desc_style((crate::plot::FONT, 16))
+        .draw()
+        .map_err(err)?;
+    // Nyquist.
+    chart
+        .draw_series(LineSeries::new(
+            [(0.5, 0.0), (0.5, ymax)],
+            ShapeStyle::from(&RGBColor(120, 120, 120)).stroke_width(1),
+        ))
+        .map_err(err)?
+        .label("Nyquist (0.5 cy/px)")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RGBColor(120, 120, 120)));
+    for (k, c) in m.curves.iter().enumerate() {
+        let col = COLOURS[k % COLOURS.len()];
+        let good: Vec<_> = c.points.iter().filter(|p| !p.aliased).collect();
+        // Error band.
+        if good.len() >= 2 {
+            let mut poly: Vec<(f64, f64)> = good
+                .iter()
+                .map(|p| (p.freq_cy_px, (p.mtf + p.mtf_err).min(ymax)))
+                .collect();
+            poly.extend(
+                good.iter()
+                    .rev()
+                    .map(|p| (p.freq_cy_px, (p.mtf - p.mtf_err).max(0.0))),
+            );
+            chart
+                .draw_series(std::iter::once(Polygon::new(poly, col.mix(0.25).filled())))
+                .map_err(err)?;
+        }
+        let label = if m.curves.len() > 1 {
+            format!("{}/{}", c.channel, c.sweep_id)
+        } else {
+            "MTF".to_string()
+        };
+        chart
+            .draw_series(LineSeries::new(
+                good.iter().map(|p| (p.freq_cy_px, p.mtf.min(ymax))),
+                col.stroke_width(2),
+            ))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], col.stroke_width(2)));
+        let aliased: Vec<_> = c.points.iter().filter(|p| p.aliased).collect();
+        if !aliased.is_empty() {
+            chart
+                .draw_series(aliased.iter().map(|p| {
+                    Circle::new(
+                        (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
+                        2,
+                        RGBColor(160, 160, 160).filled(),
+                    )
+                }))
+                .map_err(err)?
+                .label("aliased (not MTF)")
+                .legend(|(x, y)| Circle::new((x + 9, y), 3, RGBColor(160, 160, 160).filled()));
+        }
+        if let Some(f50) = c.figures.mtf50_cy_px {
+            chart
+                .draw_series([
+                    PathElement::new([(f50, 0.0), (f50, 0.5)], col.stroke_width(1)),
+                    PathElement::new([(0.0, 0.5), (f50, 0.5)], col.stroke_width(1)),
+                ])
+                .map_err(err)?;
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    format!("MTF50 = {f50:.3} cy/px"),
+                    (f50 + 0.01, 0.53),
+                    (crate::plot::FONT, 15).into_font().color(&col),
+                )))
+                .map_err(err)?;
+        }
+    }
+    if !m.patches.is_empty() {
+        let col = RGBColor(230, 120, 20);
+        chart
+            .draw_series(m.patches.iter().map(|p| {
+                PathElement::new(
+                    [
+                        (p.freq_cy_px, (p.mtf - p.mtf_err).max(0.0)),
+                        (p.freq_cy_px, (p.mtf + p.mtf_err).min(ymax)),
+                    ],
+                    col.stroke_width(2),
+                )
+            }))
+            .map_err(err)?;
+        chart
+            .draw_series(m.patches.iter().map(|p| {
+                let c = if p.aliased {
+                    RGBColor(160, 160, 160)
+                } else {
+                    col
+                };
+                Circle::new((p.freq_cy_px, p.mtf.min(ymax)), 4, c.filled())
+            }))
+            .map_err(err)?
+            .label("sine patches")
+            .legend(move |(x, y)| Circle::new((x + 9, y), 4, col.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .label_font((crate::plot::FONT, 15))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}

@@ -1,0 +1,108 @@
+//! The region picture: a crop of the photo with the given region (yellow),
+//! the binned part of each strip (cyan), the extent of the measured points
+//! (green) and where aliasing starts (red), so a user sees where it measured.
+
+use super::atomic::ReportError;
+use crate::geometry::Point;
+use crate::measure::Measurement;
+use plotters::prelude::*;
+
+fn err(e: impl std::fmt::Display) -> ReportError {
+    ReportError::Plot {
+        what: "the region picture".into(),
+        cause: e.to_string(),
+    }
+}
+
+/// Encodes an RGB8 buffer as PNG.
+pub fn encode_png(buf: Vec<u8>, w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
+    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| err("buffer size"))?;
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(err)?;
+    Ok(out.into_inner())
+}
+
+/// Renders the region picture (PNG bytes).
+pub fn roi_plot(m: &Measurement) -> Result<Vec<u8>, ReportError> {
+    crate::plot::ensure_font();
+    let pv = &m.preview;
+    if pv.width == 0 || pv.height == 0 {
+        return Err(err("no preview of the photo"));
+    }
+    let legend_h = 26u32;
+    let (w, h) = (pv.width.max(360) as u32, pv.height as u32 + legend_h);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    for y in 0..pv.height {
+        let src = &pv.rgb[y * pv.width * 3..(y + 1) * pv.width * 3];
+        let dst = (y * w as usize) * 3;
+        buf[dst..dst + src.len()].copy_from_slice(src);
+    }
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let to = |p: Point| -> (i32, i32) {
+            (
+                ((p[0] - pv.x0) / pv.scale).round() as i32,
+                ((p[1] - pv.y0) / pv.scale).round() as i32,
+            )
+        };
+        let quad = |q: &[Point; 4]| -> Vec<(i32, i32)> {
+            let mut v: Vec<_> = q.iter().map(|&p| to(p)).collect();
+            v.push(v[0]);
+            v
+        };
+        let yellow = RGBColor(255, 200, 0);
+        let cyan = RGBColor(0, 190, 230);
+        let green = RGBColor(0, 200, 60);
+        let red = RGBColor(230, 30, 30);
+        root.draw(&PathElement::new(quad(&m.roi), yellow.stroke_width(2)))
+            .map_err(err)?;
+        let c1 = to(m.roi[0]);
+        root.draw(&Circle::new(c1, 5, yellow.filled()))
+            .map_err(err)?;
+        for p in &m.patches {
+            let col = if p.aliased { red } else { cyan };
+            root.draw(&PathElement::new(quad(&p.region_px), col.stroke_width(1)))
+                .map_err(err)?;
+        }
+        for c in &m.curves {
+            root.draw(&PathElement::new(quad(&c.region_px), cyan.stroke_width(1)))
+                .map_err(err)?;
+            for l in &c.measured_lines_px {
+                root.draw(&PathElement::new(
+                    vec![to(l[0]), to(l[1])],
+                    green.stroke_width(3),
+                ))
+                .map_err(err)?;
+            }
+            if let Some(l) = c.alias_line_px {
+                root.draw(&PathElement::new(
+                    vec![to(l[0]), to(l[1])],
+                    red.stroke_width(3),
+                ))
+                .map_err(err)?;
+            }
+        }
+        let font = (crate::plot::FONT, 15).into_font();
+        let y = pv.height as i32 + 5;
+        let items = [
+            ("region (corner 1 dot)", yellow),
+            ("binned", cyan),
+            ("measured extent", green),
+            ("aliasing starts", red),
+        ];
+        let mut x = 6;
+        for (label, col) in items {
+            root.draw(&Rectangle::new(
+                [(x, y + 3), (x + 14, y + 13)],
+                col.filled(),
+            ))
+            .map_err(err)?;
+            root.draw(&Text::new(label, (x + 18, y), font.clone().color(&BLACK)))
+                .map_err(err)?;
+            x += 26 + 8 * label.len() as i32;
+        }
+        root.present().map_err(err)?;
+    }
+    encode_png(buf, w, h)
+}
