@@ -49,6 +49,37 @@ pub fn write_atomic_with(
     result
 }
 
+/// Writes several files atomically without flushing them to disk: each goes
+/// to a temporary file first, and only when all are written are they renamed
+/// into place (temporaries removed on failure). Renaming is what makes a
+/// killed process leave whole files; the per-shot files skip `fsync`, which
+/// on a busy disk costs more than the measurement itself (a power loss can
+/// leave an empty file, which resume treats as missing).
+pub fn write_all_atomic_unsynced(files: &[(PathBuf, Vec<u8>)]) -> std::io::Result<()> {
+    let mut temps: Vec<PathBuf> = Vec::new();
+    let cleanup = |t: &[PathBuf]| {
+        for p in t {
+            let _ = fs::remove_file(p);
+        }
+    };
+    for (path, bytes) in files {
+        let tmp = temp_path(path);
+        if let Err(e) = fs::write(&tmp, bytes) {
+            let _ = fs::remove_file(&tmp);
+            cleanup(&temps);
+            return Err(e);
+        }
+        temps.push(tmp);
+    }
+    for (k, (path, _)) in files.iter().enumerate() {
+        if let Err(e) = fs::rename(&temps[k], path) {
+            cleanup(&temps[k..]);
+            return Err(e);
+        }
+    }
+    Ok(())
+}
+
 /// Copies `from` to `to` atomically.
 pub fn copy_atomic(from: &Path, to: &Path) -> std::io::Result<()> {
     write_atomic_with(to, |f| {

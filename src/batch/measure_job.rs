@@ -5,13 +5,14 @@
 //! written together atomically) and turns the result and the photo's EXIF
 //! facts into a summary row.
 
+use super::atomic::write_all_atomic_unsynced;
 use super::record::{FailKind, ShotFailure, ShotResult};
 use super::roi_file::RoiTable;
 use super::runner::{PlannedShot, ShotJob};
 use crate::geometry::Point;
 use crate::measure::{Failure, MeasureOptions, Measurement, measure_file};
 use crate::photo::exif::{self, ExifFacts};
-use crate::report::atomic::{ReportError, write_all_atomic};
+use crate::report::atomic::ReportError;
 use crate::report::csv::{curves_csv, lw_ph, patches_csv};
 use crate::report::json::{Timings, summary_json};
 use crate::report::mtf_plot::{PlotFormat, mtf_plot};
@@ -107,7 +108,12 @@ impl ShotJob for MeasureJob {
             .into_iter()
             .map(|(n, b)| (shots_dir.join(n), b))
             .collect();
-        write_all_atomic(&paths).map_err(out_err)?;
+        write_all_atomic_unsynced(&paths).map_err(|e| {
+            ShotFailure::new(
+                FailKind::Output,
+                format!("{}: cannot write: {e}", shots_dir.display()),
+            )
+        })?;
         let curve = (!m.curves.is_empty()).then_some(csv_name);
         Ok(result_of(&m, &facts, curve, names))
     }

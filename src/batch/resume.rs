@@ -100,10 +100,11 @@ pub fn read_marker(shots_dir: &Path, stem: &str) -> Option<Marker> {
     (m.version == MARKER_VERSION).then_some(m)
 }
 
-/// Writes a marker atomically (the last file of a shot).
+/// Writes a marker atomically (the last file of a shot; renamed into place,
+/// not flushed, like the shot's other files).
 pub fn write_marker(shots_dir: &Path, m: &Marker) -> std::io::Result<()> {
     let bytes = serde_json::to_vec_pretty(m).map_err(std::io::Error::other)?;
-    super::atomic::write_atomic(&marker_path(shots_dir, &m.record.stem), &bytes)
+    super::atomic::write_all_atomic_unsynced(&[(marker_path(shots_dir, &m.record.stem), bytes)])
 }
 
 /// Removes a shot's marker (before redoing it); a missing marker is fine.
@@ -114,13 +115,14 @@ pub fn clear_marker(shots_dir: &Path, stem: &str) -> std::io::Result<()> {
     }
 }
 
-/// Whether every output listed in the marker exists in `shots_dir`.
+/// Whether every output listed in the marker exists in `shots_dir` and is
+/// not empty (an empty file is what a power loss can leave).
 pub fn outputs_present(shots_dir: &Path, m: &Marker) -> bool {
     m.record
         .result
         .outputs
         .iter()
-        .all(|o| shots_dir.join(o).is_file())
+        .all(|o| std::fs::metadata(shots_dir.join(o)).is_ok_and(|md| md.is_file() && md.len() > 0))
 }
 
 /// The stored record of shot `stem` when the shot is complete for this
