@@ -310,10 +310,16 @@ fn solve_with_correction(
 
 /// Looks for fiducial `fi` where `h` predicts it; its refined image centre when a mark
 /// of the predicted size and shape is there.
-fn recover_mark(full: &Gray<'_>, target: &Target, h: &Homography, fi: usize) -> Option<Point> {
+fn recover_mark(
+    full: &Gray<'_>,
+    target: &Target,
+    h: &Homography,
+    fi: usize,
+    start: Option<Point>,
+) -> Option<Point> {
     let f = &target.fiducials[fi];
     let c = [f.x_mm, f.y_mm];
-    let p = h.apply(c);
+    let p = start.unwrap_or_else(|| h.apply(c));
     let j = h.jacobian(c);
     let r2 = (f.diameter_mm / 2.0).powi(2) / 4.0;
     let pred = [
@@ -339,7 +345,57 @@ fn recover_mark(full: &Gray<'_>, target: &Target, h: &Homography, fi: usize) -> 
     let size = ((e.cov[0] * e.cov[2] - e.cov[1] * e.cov[1])
         / (pred[0] * pred[2] - pred[1] * pred[1]))
         .sqrt();
-    (moved < 0.6 * radius + 1.0 && (0.6..=1.6).contains(&size)).then_some(e.centre)
+    // Seeded from a blob near an affine guess (perhaps a fragment of a ring): the fit may
+    // move further from the seed, and the guessed size is less certain.
+    let (max_move, sizes) = if start.is_some() {
+        (1.5 * radius + 1.0, 0.4..=2.5)
+    } else {
+        (0.6 * radius + 1.0, 0.6..=1.6)
+    };
+    if !(moved < max_move && sizes.contains(&size)) {
+        return None;
+    }
+    if start.is_some() {
+        // Far from a trusted prediction: the refined ellipse must pass the disk test itself.
+        let g = [
+            e.cov[0] / (s[0] * s[0]),
+            e.cov[1] / (s[0] * s[1]),
+            e.cov[2] / (s[1] * s[1]),
+        ];
+        let t = super::blobs::ray_test(full, full.to_grid(e.centre), g)?;
+        if !t.disk_like {
+            return None;
+        }
+    }
+    Some(e.centre)
+}
+
+/// Looks for the hidden mark at blobs near where an (affine) guess puts it, nearest first.
+fn recover_near(
+    full: &Gray<'_>,
+    target: &Target,
+    h: &Homography,
+    fi: usize,
+    cands: &[Candidate],
+    used: &[usize],
+) -> Option<Point> {
+    let f = &target.fiducials[fi];
+    let p = h.apply([f.x_mm, f.y_mm]);
+    let span = {
+        let c = rect_corners(0.0, 0.0, target.width_mm, target.height_mm).map(|q| h.apply(q));
+        (c[2][0] - c[0][0]).hypot(c[2][1] - c[0][1])
+    };
+    let mut near: Vec<(f64, usize)> = cands
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !used.contains(i))
+        .map(|(i, c)| ((c.centre_px[0] - p[0]).hypot(c.centre_px[1] - p[1]), i))
+        .filter(|&(d, _)| d <= 0.1 * span)
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    near.iter()
+        .take(6)
+        .find_map(|&(_, i)| recover_mark(full, target, h, fi, Some(cands[i].centre_px)))
 }
 
 /// Full-resolution refinement of a pick; `None` when the marks cannot be measured.
@@ -371,13 +427,19 @@ pub fn finish(plane: &Plane, target: &Target, pick: &Pick, cands: &[Candidate]) 
                 ([f.x_mm, f.y_mm], p)
             })
             .collect();
-        let edges = super::refine::fit_target_edges(&full, target, h, &fixed);
-        if let Some((h2, _)) = edges {
-            h = h2;
+        // The mark may be there but too small or faint for the blob search: look at
+        // blobs near where the affine guess puts it, then where the edge-refined
+        // solution predicts it.
+        let mut edges = None;
+        let mut found = recover_near(&full, target, &h, missing, cands, &pick.cand_idx);
+        if found.is_none() {
+            edges = super::refine::fit_target_edges(&full, target, h, &fixed);
+            if let Some((h2, _)) = edges {
+                h = h2;
+            }
+            found = recover_mark(&full, target, &h, missing, None);
         }
-        // The mark may be there but too small or faint for the blob search: look where
-        // the solution predicts it.
-        if let Some(p) = recover_mark(&full, target, &h, missing) {
+        if let Some(p) = found {
             marks.push((missing, p));
             h = solve_with_correction(target, &marks, h)?;
         } else {
