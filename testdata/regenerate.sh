@@ -18,3 +18,8 @@ $S --target demo:log $OPT --size 1200x800 --rotate 12 --tilt 25,y --oversample 4
 # 16-bit linear Bayer RGGB mosaic (TIFF with CFA tags), mild noise.
 $S --target demo:log $OPT --size 900x600 --bayer RGGB --full-well 20000 --read-noise 4 \
    --seed 3 -o testdata/sweep_log_bayer_rggb.tif
+# The README's main command: the shipped A4 log chart (targets/a4_log.toml, with
+# fiducials) rotated 4°, tilted 15°, 20 % fall-off, noise, JPEG q90.
+$S --target targets/a4_log.toml $OPT --gaussian sigma=2.5um --size 2000x1400 --rotate 4 \
+   --tilt 15,y --falloff 0.2 --oversample 4 --full-well 20000 --read-noise 4 --seed 5 \
+   --jpeg 90 -o testdata/a4_log_shot.jpg
