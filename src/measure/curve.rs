@@ -100,7 +100,8 @@ pub fn extrapolate_chart_modulation(points: &[MtfPoint]) -> Result<(f64, f64, f6
     Ok((a, f_lo, f_top))
 }
 
-fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
+/// Solves a 3×3 linear system by Gaussian elimination with partial pivoting.
+pub(crate) fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
     for col in 0..3 {
         let piv = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[piv][col].abs() < 1e-300 {

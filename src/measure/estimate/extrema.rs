@@ -6,6 +6,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 use super::{Estimator, ModPoint, bin_attenuation};
+use crate::measure::curve::solve3;
 use crate::measure::law::PhaseLaw;
 use crate::measure::profile::Profile;
 
@@ -77,27 +78,6 @@ fn locate(prof: &Profile, phases: &[f64], centre: f64, is_max: bool) -> Option<P
         0.0
     };
     Some(Peak { s, value, var })
-}
-
-fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
-    for col in 0..3 {
-        let piv = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, piv);
-        r.swap(col, piv);
-        for row in 0..3 {
-            if row != col {
-                let f = a[row][col] / a[col][col];
-                for j in 0..3 {
-                    a[row][j] -= f * a[col][j];
-                }
-                r[row] -= f * r[col];
-            }
-        }
-    }
-    Some([r[0] / a[0][0], r[1] / a[1][1], r[2] / a[2][2]])
 }
 
 impl Estimator for Extrema {
