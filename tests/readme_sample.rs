@@ -75,3 +75,39 @@ fn main_command_measures_the_sample_without_corners() {
         assert!(rms <= bar, "{sweep}: RMS {rms:.4} > {bar}");
     }
 }
+
+/// Issue 7: a real photo of another chart design gives "no chart found" (exit 4),
+/// the picture of what was seen, and no measurement files.
+#[test]
+fn no_chart_found_writes_what_was_seen_and_nothing_else() {
+    let photo = ["../shared/realdata", "../../shared/realdata"]
+        .iter()
+        .map(|d| {
+            std::path::Path::new(ROOT)
+                .join(d)
+                .join("chart_photo/mtfmapper_perspective_chart_photo.jpg")
+        })
+        .find(|p| p.is_file())
+        .expect("shared/realdata beside the checkout");
+    let out = tempfile::tempdir().unwrap();
+    let assert = Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .current_dir(ROOT)
+        .arg("measure")
+        .arg(&photo)
+        .args(["--target", "targets/a4_log.toml", "-o"])
+        .arg(out.path())
+        .assert()
+        .code(4);
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("no chart found"), "{stderr}");
+    let names: Vec<String> = std::fs::read_dir(out.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        vec!["mtfmapper_perspective_chart_photo.roi.png".to_string()]
+    );
+}

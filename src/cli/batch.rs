@@ -151,6 +151,7 @@ impl MeasureFlags {
             bin_px: self.bin_px,
             margin: self.margin,
             window_cycles: self.window,
+            chart_index: None,
         })
     }
 }

@@ -25,6 +25,9 @@ pub struct Args {
     /// Target description (chart TOML or sineMTF tgt.txt).
     #[arg(long, value_name = "FILE")]
     pub target: Option<PathBuf>,
+    /// With several charts in the frame (found automatically): which one, 0 = leftmost.
+    #[arg(long, value_name = "N")]
+    pub chart_index: Option<usize>,
     /// Modulation estimator: extrema | fit | envelope.
     #[arg(long, default_value = "fit", value_name = "METHOD", value_parser = parse_method)]
     pub method: Method,
@@ -141,6 +144,7 @@ fn options(a: &Args) -> Result<MeasureOptions, CliError> {
         bin_px: a.bin_px,
         margin: a.margin,
         window_cycles: a.window,
+        chart_index: a.chart_index,
     })
 }
 
@@ -203,6 +207,37 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
     )
 }
 
+/// The error for a failed measurement; when automatic location found no chart,
+/// also writes `STEM.roi.png`, the picture of what was seen, and names it.
+fn located_failure(a: &Args, opts: &MeasureOptions, e: MeasureError) -> CliError {
+    let searched = opts.roi.is_none() && opts.target.is_some();
+    if !(searched && matches!(e.failure, Failure::Region(_))) {
+        return fail(e);
+    }
+    let mut err = fail(e);
+    let stem = a
+        .photo
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "photo".into());
+    let path = a.out.join(format!("{stem}.roi.png"));
+    let picture = sweepmtf::measure::location_picture(&a.photo, opts).and_then(|img| {
+        let mut bytes = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .ok()?;
+        std::fs::create_dir_all(&a.out).ok()?;
+        sweepmtf::report::atomic::write_atomic(&path, &bytes).ok()
+    });
+    if picture.is_some() {
+        err.message
+            .push_str(&format!(" (what was seen: {})", path.display()));
+    }
+    err
+}
+
 /// Runs `sweepmtf measure`.
 pub fn run(a: &Args) -> Result<(), CliError> {
     let t_start = Instant::now();
@@ -211,7 +246,10 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     let name = a.photo.display().to_string();
     let prepared = super::measure_model::prepare(&a.model, &a.photo)?;
     let t1 = Instant::now();
-    let m = sweepmtf::measure::measure_file(&a.photo, &opts).map_err(fail)?;
+    let m = match sweepmtf::measure::measure_file(&a.photo, &opts) {
+        Ok(m) => m,
+        Err(e) => return Err(located_failure(a, &opts, e)),
+    };
     let t2 = Instant::now();
     let extras = prepared.finish(&m)?;
 

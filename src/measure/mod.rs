@@ -12,7 +12,7 @@
 
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
-use crate::photo::decode::{DecodeError, Decoded, Samples, decode_bytes};
+use crate::photo::decode::{DecodeError, Decoded, Samples, decode_bytes, decode_file};
 use crate::photo::linearise::{
     Channel, Crop, Tone, ToneCurve, default_tone, plane_names, planes, planes_within,
 };
@@ -76,6 +76,8 @@ pub struct MeasureOptions {
     pub margin: f64,
     /// Estimator window (cycles).
     pub window_cycles: f64,
+    /// Which chart to measure when automatic location finds several (0 = leftmost).
+    pub chart_index: Option<usize>,
 }
 
 impl Default for MeasureOptions {
@@ -92,6 +94,7 @@ impl Default for MeasureOptions {
             bin_px: 0.25,
             margin: 0.15,
             window_cycles: 4.0,
+            chart_index: None,
         }
     }
 }
@@ -332,6 +335,26 @@ pub fn load_target(opts: &MeasureOptions) -> Result<Option<Target>, Failure> {
     }
 }
 
+/// The picture of what automatic location saw (candidate marks, charts found) in a
+/// photo, for `STEM.roi.png` when no chart was found; `None` when it cannot be made.
+pub fn location_picture(path: &Path, opts: &MeasureOptions) -> Option<image::RgbImage> {
+    let target = load_target(opts).ok()??;
+    let dec = decode_file(path).ok()?;
+    let full = Crop {
+        x0: 0,
+        y0: 0,
+        x1: dec.width,
+        y1: dec.height,
+    };
+    let grey = planes(&dec, full, &default_tone(dec.bits()).0, Channel::Luma);
+    let (candidates, charts) = match crate::locate::search(&grey[0], &target) {
+        Ok(seen) => (seen.candidates, seen.charts),
+        Err(crate::locate::LocateError::NotFound { candidates, .. }) => (candidates, Vec::new()),
+        Err(_) => return None,
+    };
+    Some(crate::locate::debug_image(&grey[0], &candidates, &charts))
+}
+
 /// Measures a decoded photo; `name` is used in messages.
 pub fn measure_decoded(
     dec: &Decoded,
@@ -355,7 +378,7 @@ pub fn measure_decoded(
                 y1: dec.height,
             };
             let grey = planes(dec, full, &default_tone(dec.bits()).0, Channel::Luma);
-            let loc = crate::locate::find_chart(&grey[0], t, None)
+            let loc = crate::locate::find_chart(&grey[0], t, opts.chart_index)
                 .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
             warnings.extend(loc.warnings);
             warnings.push("region found automatically from the target's fiducials".into());
