@@ -111,3 +111,71 @@ fn no_chart_found_writes_what_was_seen_and_nothing_else() {
         vec!["mtfmapper_perspective_chart_photo.roi.png".to_string()]
     );
 }
+
+/// RMS |MTF − truth| over 0.01–0.45 cy/px of one sweep row of a measured CSV.
+fn rms_vs_truth(csv_path: &std::path::Path, sweep: &str) -> f64 {
+    let truth: Vec<(f64, f64)> =
+        read_csv(&std::path::Path::new(ROOT).join("testdata/a4_log_shot.truth.csv"))
+            .iter()
+            .map(|r| (r["freq_cy_px"].parse().unwrap(), r["mtf"].parse().unwrap()))
+            .collect();
+    let errs: Vec<f64> = read_csv(csv_path)
+        .iter()
+        .filter(|r| r["sweep"] == sweep && r["aliased"] == "false")
+        .filter_map(|r| {
+            let f: f64 = r["freq_cy_px"].parse().unwrap();
+            (0.01..=0.45)
+                .contains(&f)
+                .then(|| r["mtf"].parse::<f64>().unwrap() - truth_at(&truth, f))
+        })
+        .collect();
+    (errs.iter().map(|e| e * e).sum::<f64>() / errs.len() as f64).sqrt()
+}
+
+/// Issue 7: target corners given ±5 px off are refined to the chart's edges, so
+/// the result stays within the bar of the exactly placed shot.
+#[test]
+fn refine_roi_absorbs_five_pixel_corner_errors() {
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(std::path::Path::new(ROOT).join("testdata/a4_log_shot.json"))
+            .unwrap(),
+    )
+    .unwrap();
+    let exact: Vec<f64> = json["target_corners"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|p| match p.as_array() {
+            Some(xy) => xy.iter().map(|v| v.as_f64().unwrap()).collect::<Vec<_>>(),
+            None => vec![p.as_f64().unwrap()],
+        })
+        .collect();
+    assert_eq!(exact.len(), 8);
+    let offsets = [5.0, -4.0, -5.0, 3.0, 4.0, 5.0, -3.0, -5.0];
+    let roi: Vec<String> = exact
+        .iter()
+        .zip(offsets)
+        .map(|(v, d)| format!("{}", v + d))
+        .collect();
+    let out = tempfile::tempdir().unwrap();
+    let assert = Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .current_dir(ROOT)
+        .args([
+            "measure",
+            "testdata/a4_log_shot.jpg",
+            "--target",
+            "targets/a4_log.toml",
+            "--refine-roi",
+            "--roi",
+        ])
+        .arg(roi.join(","))
+        .arg("-o")
+        .arg(out.path())
+        .assert()
+        .success();
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    assert!(stderr.contains("refined"), "{stderr}");
+    let rms = rms_vs_truth(&out.path().join("a4_log_shot.mtf.csv"), "main");
+    assert!(rms <= 0.005, "main row RMS {rms:.4} after refinement");
+}

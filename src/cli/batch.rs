@@ -152,6 +152,7 @@ impl MeasureFlags {
             margin: self.margin,
             window_cycles: self.window,
             chart_index: None,
+            refine_roi: false,
         })
     }
 }

@@ -25,6 +25,9 @@ pub struct Args {
     /// Target description (chart TOML or sineMTF tgt.txt).
     #[arg(long, value_name = "FILE")]
     pub target: Option<PathBuf>,
+    /// Refine the --roi corners (good to about ±5 px) to the strip's or target's edges.
+    #[arg(long)]
+    pub refine_roi: bool,
     /// With several charts in the frame (found automatically): which one, 0 = leftmost.
     #[arg(long, value_name = "N")]
     pub chart_index: Option<usize>,
@@ -145,6 +148,7 @@ fn options(a: &Args) -> Result<MeasureOptions, CliError> {
         margin: a.margin,
         window_cycles: a.window,
         chart_index: a.chart_index,
+        refine_roi: a.refine_roi,
     })
 }
 

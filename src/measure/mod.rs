@@ -78,7 +78,12 @@ pub struct MeasureOptions {
     pub window_cycles: f64,
     /// Which chart to measure when automatic location finds several (0 = leftmost).
     pub chart_index: Option<usize>,
+    /// Refine the given `roi` corners to the region's edges (corners good to ±`refine_px`).
+    pub refine_roi: bool,
 }
+
+/// How far (px) `refine_roi` searches around each given corner.
+pub const REFINE_SEARCH_PX: f64 = 8.0;
 
 impl Default for MeasureOptions {
     fn default() -> Self {
@@ -95,6 +100,7 @@ impl Default for MeasureOptions {
             margin: 0.15,
             window_cycles: 4.0,
             chart_index: None,
+            refine_roi: false,
         }
     }
 }
@@ -384,7 +390,31 @@ pub fn measure_decoded(
             warnings.push("region found automatically from the target's fiducials".into());
             loc.corners_px
         }
-        _ => resolve_roi(opts, dec.width, dec.height).map_err(err)?,
+        _ => {
+            let given = resolve_roi(opts, dec.width, dec.height).map_err(err)?;
+            if opts.refine_roi {
+                let full = Crop {
+                    x0: 0,
+                    y0: 0,
+                    x1: dec.width,
+                    y1: dec.height,
+                };
+                let grey = planes(dec, full, &default_tone(dec.bits()).0, Channel::Luma);
+                let refined = crate::locate::refine_roi(&grey[0], given, target, REFINE_SEARCH_PX)
+                    .map_err(|e| err(Failure::Region(format!("--refine-roi: {e}"))))?;
+                let moved = given
+                    .iter()
+                    .zip(&refined)
+                    .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                    .fold(0.0, f64::max);
+                warnings.push(format!(
+                    "region corners refined to the edges (moved up to {moved:.2} px)"
+                ));
+                refined
+            } else {
+                given
+            }
+        }
     };
     // Crop: the region's bounding box (+2 px).
     let crop = bbox_crop(&roi, dec.width, dec.height, 2.0);
