@@ -51,27 +51,11 @@ fn main_command_measures_the_sample_without_corners() {
             "{f} missing"
         );
     }
-    let truth: Vec<(f64, f64)> =
-        read_csv(&std::path::Path::new(ROOT).join("testdata/a4_log_shot.truth.csv"))
-            .iter()
-            .map(|r| (r["freq_cy_px"].parse().unwrap(), r["mtf"].parse().unwrap()))
-            .collect();
-    let rows = read_csv(&out.path().join("a4_log_shot.mtf.csv"));
     // Bars: issue 5 (noise + JPEG q90, rotation, tilt) for the 0.8 row; the
     // 0.2-contrast row is the low-modulation case (≤ 0.04).
+    let csv_path = out.path().join("a4_log_shot.mtf.csv");
     for (sweep, bar) in [("main", 0.015), ("c0.4", 0.015), ("c0.2", 0.04)] {
-        let errs: Vec<f64> = rows
-            .iter()
-            .filter(|r| r["sweep"] == sweep && r["aliased"] == "false")
-            .filter_map(|r| {
-                let f: f64 = r["freq_cy_px"].parse().unwrap();
-                (0.01..=0.45)
-                    .contains(&f)
-                    .then(|| r["mtf"].parse::<f64>().unwrap() - truth_at(&truth, f))
-            })
-            .collect();
-        assert!(errs.len() > 50, "{sweep}: only {} points", errs.len());
-        let rms = (errs.iter().map(|e| e * e).sum::<f64>() / errs.len() as f64).sqrt();
+        let rms = rms_vs_truth(&csv_path, sweep);
         assert!(rms <= bar, "{sweep}: RMS {rms:.4} > {bar}");
     }
 }
@@ -129,6 +113,7 @@ fn rms_vs_truth(csv_path: &std::path::Path, sweep: &str) -> f64 {
                 .then(|| r["mtf"].parse::<f64>().unwrap() - truth_at(&truth, f))
         })
         .collect();
+    assert!(errs.len() > 50, "{sweep}: only {} points", errs.len());
     (errs.iter().map(|e| e * e).sum::<f64>() / errs.len() as f64).sqrt()
 }
 

@@ -341,18 +341,23 @@ pub fn load_target(opts: &MeasureOptions) -> Result<Option<Target>, Failure> {
     }
 }
 
-/// The picture of what automatic location saw (candidate marks, charts found) in a
-/// photo, for `STEM.roi.png` when no chart was found; `None` when it cannot be made.
-pub fn location_picture(path: &Path, opts: &MeasureOptions) -> Option<image::RgbImage> {
-    let target = load_target(opts).ok()??;
-    let dec = decode_file(path).ok()?;
+/// The whole photo as one linear luminance plane (default tone), for chart location.
+fn full_grey(dec: &Decoded) -> Vec<Plane> {
     let full = Crop {
         x0: 0,
         y0: 0,
         x1: dec.width,
         y1: dec.height,
     };
-    let grey = planes(&dec, full, &default_tone(dec.bits()).0, Channel::Luma);
+    planes(dec, full, &default_tone(dec.bits()).0, Channel::Luma)
+}
+
+/// The picture of what automatic location saw (candidate marks, charts found) in a
+/// photo, for `STEM.roi.png` when no chart was found; `None` when it cannot be made.
+pub fn location_picture(path: &Path, opts: &MeasureOptions) -> Option<image::RgbImage> {
+    let target = load_target(opts).ok()??;
+    let dec = decode_file(path).ok()?;
+    let grey = full_grey(&dec);
     let (candidates, charts) = match crate::locate::search(&grey[0], &target) {
         Ok(seen) => (seen.candidates, seen.charts),
         Err(crate::locate::LocateError::NotFound { candidates, .. }) => (candidates, Vec::new()),
@@ -377,13 +382,7 @@ pub fn measure_decoded(
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
         (None, Some(t)) => {
-            let full = Crop {
-                x0: 0,
-                y0: 0,
-                x1: dec.width,
-                y1: dec.height,
-            };
-            let grey = planes(dec, full, &default_tone(dec.bits()).0, Channel::Luma);
+            let grey = full_grey(dec);
             let loc = crate::locate::find_chart(&grey[0], t, opts.chart_index)
                 .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
             warnings.extend(loc.warnings);
@@ -393,13 +392,7 @@ pub fn measure_decoded(
         _ => {
             let given = resolve_roi(opts, dec.width, dec.height).map_err(err)?;
             if opts.refine_roi {
-                let full = Crop {
-                    x0: 0,
-                    y0: 0,
-                    x1: dec.width,
-                    y1: dec.height,
-                };
-                let grey = planes(dec, full, &default_tone(dec.bits()).0, Channel::Luma);
+                let grey = full_grey(dec);
                 let refined = crate::locate::refine_roi(&grey[0], given, target, REFINE_SEARCH_PX)
                     .map_err(|e| err(Failure::Region(format!("--refine-roi: {e}"))))?;
                 let moved = given
