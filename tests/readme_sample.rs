@@ -164,3 +164,35 @@ fn refine_roi_absorbs_five_pixel_corner_errors() {
     let rms = rms_vs_truth(&out.path().join("a4_log_shot.mtf.csv"), "main");
     assert!(rms <= 0.005, "main row RMS {rms:.4} after refinement");
 }
+
+/// A failed location never clobbers the picture of an earlier result in the same folder.
+#[test]
+fn no_chart_found_keeps_an_earlier_region_picture() {
+    let photo = ["../shared/realdata", "../../shared/realdata"]
+        .iter()
+        .map(|d| {
+            std::path::Path::new(ROOT)
+                .join(d)
+                .join("chart_photo/mtfmapper_perspective_chart_photo.jpg")
+        })
+        .find(|p| p.is_file())
+        .expect("shared/realdata beside the checkout");
+    let out = tempfile::tempdir().unwrap();
+    let stem = "mtfmapper_perspective_chart_photo";
+    std::fs::write(out.path().join(format!("{stem}.mtf.csv")), "earlier").unwrap();
+    std::fs::write(out.path().join(format!("{stem}.roi.png")), "earlier").unwrap();
+    Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .current_dir(ROOT)
+        .arg("measure")
+        .arg(&photo)
+        .args(["--target", "targets/a4_log.toml", "-o"])
+        .arg(out.path())
+        .assert()
+        .code(4);
+    for f in ["mtf.csv", "roi.png"] {
+        let kept = std::fs::read_to_string(out.path().join(format!("{stem}.{f}"))).unwrap();
+        assert_eq!(kept, "earlier", "{f} was overwritten");
+    }
+    assert!(out.path().join(format!("{stem}.seen.png")).is_file());
+}

@@ -212,7 +212,8 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
 }
 
 /// The error for a failed measurement; when automatic location found no chart,
-/// also writes `STEM.roi.png`, the picture of what was seen, and names it.
+/// also writes `STEM.roi.png` (`STEM.seen.png` when an earlier result is there),
+/// the picture of what was seen, and names it.
 fn located_failure(a: &Args, opts: &MeasureOptions, e: MeasureError) -> CliError {
     let searched = opts.roi.is_none() && opts.target.is_some();
     if !(searched && matches!(e.failure, Failure::Region(_))) {
@@ -224,7 +225,12 @@ fn located_failure(a: &Args, opts: &MeasureOptions, e: MeasureError) -> CliError
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "photo".into());
-    let path = a.out.join(format!("{stem}.roi.png"));
+    // Never clobber the picture of an earlier, complete result in the same folder.
+    let earlier = a.out.join(format!("{stem}.mtf.csv")).exists();
+    let path = a.out.join(format!(
+        "{stem}.{}",
+        if earlier { "seen.png" } else { "roi.png" }
+    ));
     let picture = sweepmtf::measure::location_picture(&a.photo, opts).and_then(|img| {
         let mut bytes = Vec::new();
         img.write_to(
