@@ -183,7 +183,8 @@ where
             chart
                 .draw_series(std::iter::once(Text::new(
                     format!("MTF50 = {f50:.3} cy/px"),
-                    (f50 + 0.01, 0.53),
+                    // One label line per curve, stacked, so several rows stay readable.
+                    (f50 + 0.01, 0.53 + 0.05 * k as f64),
                     (crate::plot::FONT, 15).into_font().color(&col),
                 )))
                 .map_err(err)?;
