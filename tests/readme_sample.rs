@@ -60,11 +60,9 @@ fn main_command_measures_the_sample_without_corners() {
     }
 }
 
-/// Issue 7: a real photo of another chart design gives "no chart found" (exit 4),
-/// the picture of what was seen, and no measurement files.
-#[test]
-fn no_chart_found_writes_what_was_seen_and_nothing_else() {
-    let photo = ["../shared/realdata", "../../shared/realdata"]
+/// The real photo of another chart design, in shared/realdata beside the checkout.
+fn real_chart_photo() -> std::path::PathBuf {
+    ["../shared/realdata", "../../shared/realdata"]
         .iter()
         .map(|d| {
             std::path::Path::new(ROOT)
@@ -72,7 +70,14 @@ fn no_chart_found_writes_what_was_seen_and_nothing_else() {
                 .join("chart_photo/mtfmapper_perspective_chart_photo.jpg")
         })
         .find(|p| p.is_file())
-        .expect("shared/realdata beside the checkout");
+        .expect("shared/realdata beside the checkout")
+}
+
+/// Issue 7: a real photo of another chart design gives "no chart found" (exit 4),
+/// the picture of what was seen, and no measurement files.
+#[test]
+fn no_chart_found_writes_what_was_seen_and_nothing_else() {
+    let photo = real_chart_photo();
     let out = tempfile::tempdir().unwrap();
     let assert = Command::cargo_bin("sweepmtf")
         .unwrap()
@@ -168,15 +173,7 @@ fn refine_roi_absorbs_five_pixel_corner_errors() {
 /// A failed location never clobbers the picture of an earlier result in the same folder.
 #[test]
 fn no_chart_found_keeps_an_earlier_region_picture() {
-    let photo = ["../shared/realdata", "../../shared/realdata"]
-        .iter()
-        .map(|d| {
-            std::path::Path::new(ROOT)
-                .join(d)
-                .join("chart_photo/mtfmapper_perspective_chart_photo.jpg")
-        })
-        .find(|p| p.is_file())
-        .expect("shared/realdata beside the checkout");
+    let photo = real_chart_photo();
     let out = tempfile::tempdir().unwrap();
     let stem = "mtfmapper_perspective_chart_photo";
     std::fs::write(out.path().join(format!("{stem}.mtf.csv")), "earlier").unwrap();
