@@ -78,7 +78,7 @@ impl PhaseTable {
             } else {
                 1.0
             };
-            let (sn, cs) = (2.0 * PI * ph.rem_euclid(1.0)).sin_cos();
+            let (sn, cs) = (2.0 * PI * (ph - ph.floor())).sin_cos();
             phase.push(ph);
             cos.push(att * cs);
             sin.push(att * sn);
