@@ -17,6 +17,7 @@ use crate::photo::linearise::{
     Channel, Crop, Tone, ToneCurve, default_tone, plane_names, planes, planes_within,
 };
 use crate::target::{Direction, Sweep, SweepLaw, Target, TargetError};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -870,15 +871,17 @@ fn measure_strip(
     }
     // Refine each candidate; keep the one explaining the most phase with the least residual.
     let mut best: Option<(PhaseLaw, f64, usize)> = None;
-    for l in laws {
-        if let Some(r) = refine_law(&prof, l, &s_per_px, &band_limit) {
-            let better = match &best {
-                None => true,
-                Some(b) => r.2 > b.2 + b.2 / 10 || (r.2 + r.2 / 10 >= b.2 && r.1 < b.1),
-            };
-            if better {
-                best = Some(r);
-            }
+    let refined: Vec<_> = laws
+        .par_iter()
+        .filter_map(|&l| refine_law(&prof, l, &s_per_px, &band_limit))
+        .collect();
+    for r in refined {
+        let better = match &best {
+            None => true,
+            Some(b) => r.2 > b.2 + b.2 / 10 || (r.2 + r.2 / 10 >= b.2 && r.1 < b.1),
+        };
+        if better {
+            best = Some(r);
         }
     }
     let Some((law, _, n_resolved)) = best else {

@@ -10,6 +10,7 @@
 
 use crate::geometry::{Homography, Point};
 use crate::photo::Plane;
+use rayon::prelude::*;
 
 /// A strip on the chart: its own frame `(s, t)` (s along the sweep from the
 /// low-frequency edge, t across) and where that frame lies in the image.
@@ -159,22 +160,43 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
         bin,
         nbins,
     };
-    let mut acc = vec![BinAcc::default(); nbins];
+    let acc = Vec::new();
     let mut prof = Profile {
         bin,
         length: strip.length,
         ..Profile::default()
     };
-    let (mut samples, mut high, mut low) = (0usize, 0usize, 0usize);
-    region.visit(|b, s, v| {
-        samples += 1;
-        high += (v >= opts.clip_level) as usize;
-        low += (v <= 0.0) as usize;
-        acc[b].add(s, v);
-    });
-    prof.samples = samples;
-    prof.clipped_high = high;
-    prof.clipped_low = low;
+    // First pass in parallel over a fixed split of the bands (the same split
+    // on any machine, merged in order: results do not depend on threads).
+    let bands = region.bands();
+    let per = bands.len().div_ceil(PASS_CHUNKS).max(1);
+    let parts: Vec<(Vec<BinAcc>, [usize; 3])> = bands
+        .par_chunks(per)
+        .map(|chunk| {
+            let mut acc = vec![BinAcc::default(); nbins];
+            let mut count = [0usize; 3];
+            for band in chunk {
+                region.visit_band(band, |b, s, v| {
+                    count[0] += 1;
+                    count[1] += (v >= opts.clip_level) as usize;
+                    count[2] += (v <= 0.0) as usize;
+                    acc[b].add(s, v);
+                });
+            }
+            (acc, count)
+        })
+        .collect();
+    let mut parts = parts.into_iter();
+    let (mut acc, mut count) = parts.next().unwrap_or((acc, [0; 3]));
+    for (more, c) in parts {
+        for (a, b) in acc.iter_mut().zip(&more) {
+            a.merge(b);
+        }
+        count.iter_mut().zip(c).for_each(|(x, y)| *x += y);
+    }
+    prof.samples = count[0];
+    prof.clipped_high = count[1];
+    prof.clipped_low = count[2];
     // Robust mean: drop samples more than 3σ (and more than a small floor)
     // from the bin mean. Each bin kept its EXTREMES most extreme samples on
     // either side, so the clipped sums need no second visit unless a bin has
@@ -244,6 +266,9 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
 /// How many of the most extreme samples each bin keeps on either side.
 const EXTREMES: usize = 3;
 
+/// How many pieces the first binning pass is split into (run in parallel).
+const PASS_CHUNKS: usize = 4;
+
 /// One bin's running sums, and its most extreme samples for the robust mean.
 #[derive(Clone, Copy)]
 struct BinAcc {
@@ -276,6 +301,26 @@ impl Default for BinAcc {
     }
 }
 
+/// The first EXTREMES of two lists sorted by `first` (a before b when first(a, b)).
+fn merge_sorted(
+    a: [f32; EXTREMES],
+    b: [f32; EXTREMES],
+    first: impl Fn(f32, f32) -> bool,
+) -> [f32; EXTREMES] {
+    let mut out = a;
+    let (mut i, mut j) = (0, 0);
+    for o in out.iter_mut() {
+        if first(a[i], b[j]) {
+            *o = a[i];
+            i += 1;
+        } else {
+            *o = b[j];
+            j += 1;
+        }
+    }
+    out
+}
+
 /// The larger of two values, as one `maxss` (no NaN reaches here).
 #[inline(always)]
 fn fmax(a: f32, b: f32) -> f32 {
@@ -289,6 +334,20 @@ fn fmin(a: f32, b: f32) -> f32 {
 }
 
 impl BinAcc {
+    /// Adds another accumulator's samples to this one.
+    fn merge(&mut self, o: &BinAcc) {
+        if o.n == 0 {
+            return;
+        }
+        self.sum += o.sum;
+        self.sum2 += o.sum2;
+        self.ssum += o.ssum;
+        self.ssum2 += o.ssum2;
+        self.n += o.n;
+        self.hi = merge_sorted(self.hi, o.hi, |a, b| a >= b);
+        self.lo = merge_sorted(self.lo, o.lo, |a, b| a <= b);
+    }
+
     /// Adds a sample at position `s` with value `v` (branch-free insertion
     /// into the sorted extremes).
     #[inline(always)]
@@ -432,15 +491,10 @@ impl Region<'_> {
         }
     }
 
-    /// Calls f(bin, s, value) for every sample inside the region, in blocks
-    /// of TILE × TILE samples so that the bins a block touches stay in cache.
-    #[inline]
-    fn visit<F: FnMut(usize, f64, f32)>(&self, mut f: F) {
-        const TILE: usize = 64;
-        let m = &self.m;
-        let inv_bin = 1.0 / self.bin;
-        let last = self.nbins - 1;
-        for plane in self.planes {
+    /// The region's sample rows in bands of TILE rows, with each row's sample range.
+    fn bands(&self) -> Vec<Band> {
+        let mut out = Vec::new();
+        for (p, plane) in self.planes.iter().enumerate() {
             let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
             let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
             // Sample rows whose centres lie within the region's vertical extent.
@@ -450,33 +504,70 @@ impl Region<'_> {
             let ranges: Vec<(usize, usize)> = (j0..j1)
                 .map(|j| self.row_range(oy + j as f64 * sy, ox, sx, plane.width))
                 .collect();
-            for (band, rows) in ranges.chunks(TILE).enumerate() {
-                let first = j0 + band * TILE;
-                let lo = rows.iter().filter(|r| r.0 < r.1).map(|r| r.0).min();
-                let hi = rows.iter().map(|r| r.1).max().unwrap_or(0);
-                let Some(lo) = lo else { continue };
-                for c0 in (lo..hi).step_by(TILE) {
-                    let c1 = (c0 + TILE).min(hi);
-                    for (dj, &(i0, i1)) in rows.iter().enumerate() {
-                        let (i0, i1) = (i0.max(c0), i1.min(c1));
-                        if i0 >= i1 {
-                            continue;
-                        }
-                        let j = first + dj;
-                        let y = oy + j as f64 * sy;
-                        let row = &plane.data[j * plane.width + i0..j * plane.width + i1];
-                        // Along a row the homography's numerator and denominator are linear in x.
-                        let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
-                        for (k, &v) in row.iter().enumerate() {
-                            let x = ox + (i0 + k) as f64 * sx;
-                            let s = (m[0] * x + ns0) / (m[6] * x + w0);
-                            f(((s * inv_bin) as usize).min(last), s, v);
-                        }
-                    }
+            for (k, rows) in ranges.chunks(TILE).enumerate() {
+                if rows.iter().any(|r| r.0 < r.1) {
+                    out.push(Band {
+                        plane: p,
+                        first: j0 + k * TILE,
+                        rows: rows.to_vec(),
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// Calls f(bin, s, value) for every sample inside the region.
+    fn visit<F: FnMut(usize, f64, f32)>(&self, mut f: F) {
+        for band in self.bands() {
+            self.visit_band(&band, &mut f);
+        }
+    }
+
+    /// Calls f(bin, s, value) for every sample of one band, in blocks of
+    /// TILE × TILE samples so that the bins a block touches stay in cache.
+    #[inline]
+    fn visit_band<F: FnMut(usize, f64, f32)>(&self, band: &Band, mut f: F) {
+        let m = &self.m;
+        let inv_bin = 1.0 / self.bin;
+        let last = self.nbins - 1;
+        let plane = self.planes[band.plane];
+        let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+        let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+        let rows = &band.rows;
+        let lo = rows.iter().filter(|r| r.0 < r.1).map(|r| r.0).min();
+        let hi = rows.iter().map(|r| r.1).max().unwrap_or(0);
+        let Some(lo) = lo else { return };
+        for c0 in (lo..hi).step_by(TILE) {
+            let c1 = (c0 + TILE).min(hi);
+            for (dj, &(i0, i1)) in rows.iter().enumerate() {
+                let (i0, i1) = (i0.max(c0), i1.min(c1));
+                if i0 >= i1 {
+                    continue;
+                }
+                let j = band.first + dj;
+                let y = oy + j as f64 * sy;
+                let row = &plane.data[j * plane.width + i0..j * plane.width + i1];
+                // Along a row the homography's numerator and denominator are linear in x.
+                let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
+                for (k, &v) in row.iter().enumerate() {
+                    let x = ox + (i0 + k) as f64 * sx;
+                    let s = (m[0] * x + ns0) / (m[6] * x + w0);
+                    f(((s * inv_bin) as usize).min(last), s, v);
                 }
             }
         }
     }
+}
+
+/// Rows and columns of a tile in [`Region::visit_band`].
+const TILE: usize = 64;
+
+/// Up to TILE consecutive sample rows of one plane, with each row's [i0, i1) range.
+struct Band {
+    plane: usize,
+    first: usize,
+    rows: Vec<(usize, usize)>,
 }
 
 /// The x-interval where the horizontal line at `y` crosses a convex quadrilateral.

@@ -10,6 +10,7 @@
 
 use super::Plane;
 use super::decode::{Decoded, Samples};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Rec. 709 / sRGB luminance weights of linear R, G, B.
@@ -216,7 +217,7 @@ pub fn planes_within(
     crop: Crop,
     tone: &Tone,
     channel: Channel,
-    span: &dyn Fn(usize) -> (usize, usize),
+    span: &(dyn Fn(usize) -> (usize, usize) + Sync),
 ) -> Vec<Plane> {
     let (w, h) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
     let levels = match dec.samples {
@@ -241,20 +242,20 @@ pub fn planes_within(
         .iter()
         .map(|mix| {
             let mut out = vec![0f32; w * h];
-            for y in crop.y0..crop.y1 {
+            out.par_chunks_mut(w).enumerate().for_each(|(dy, row)| {
+                let y = crop.y0 + dy;
                 let (a, b) = span(y);
                 let (a, b) = (a.clamp(crop.x0, crop.x1), b.clamp(crop.x0, crop.x1));
                 if a >= b {
-                    continue;
+                    return;
                 }
-                let row =
-                    &mut out[(y - crop.y0) * w + (a - crop.x0)..(y - crop.y0) * w + (b - crop.x0)];
+                let row = &mut row[a - crop.x0..b - crop.x0];
                 let src = (y * dec.width + a) * nc..(y * dec.width + b) * nc;
                 match &dec.samples {
                     Samples::U8(v) => convert_row(row, &v[src], nc, mix, &lut),
                     Samples::U16(v) => convert_row(row, &v[src], nc, mix, &lut),
                 }
-            }
+            });
             Plane {
                 width: w,
                 height: h,
