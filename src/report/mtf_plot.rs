@@ -128,6 +128,7 @@ where
         .map_err(err)?
         .label("Nyquist (0.5 cy/px)")
         .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RGBColor(120, 120, 120)));
+    let mut aliased_in_legend = false;
     for (k, c) in m.curves.iter().enumerate() {
         let col = COLOURS[k % COLOURS.len()];
         let good: Vec<_> = c.points.iter().filter(|p| !p.aliased).collect();
@@ -161,7 +162,7 @@ where
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], col.stroke_width(2)));
         let aliased: Vec<_> = c.points.iter().filter(|p| p.aliased).collect();
         if !aliased.is_empty() {
-            chart
+            let dots = chart
                 .draw_series(aliased.iter().map(|p| {
                     Circle::new(
                         (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
@@ -169,9 +170,13 @@ where
                         RGBColor(160, 160, 160).filled(),
                     )
                 }))
-                .map_err(err)?
-                .label("aliased (not MTF)")
-                .legend(|(x, y)| Circle::new((x + 9, y), 3, RGBColor(160, 160, 160).filled()));
+                .map_err(err)?;
+            // One legend entry for the grey dots of every curve.
+            if !aliased_in_legend {
+                aliased_in_legend = true;
+                dots.label("aliased (not MTF)")
+                    .legend(|(x, y)| Circle::new((x + 9, y), 3, RGBColor(160, 160, 160).filled()));
+            }
         }
         if let Some(f50) = c.figures.mtf50_cy_px {
             chart
