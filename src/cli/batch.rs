@@ -59,6 +59,9 @@ pub struct MeasureFlags {
     /// Target description (chart TOML or sineMTF tgt.txt).
     #[arg(long, value_name = "FILE")]
     pub target: Option<PathBuf>,
+    /// Use the region corners exactly as given (by default they are refined to the edges).
+    #[arg(long)]
+    pub no_refine_roi: bool,
     /// Modulation estimator: extrema | fit | envelope.
     #[arg(long, default_value = "fit", value_name = "METHOD", value_parser = parse_method)]
     pub method: Method,
@@ -152,7 +155,7 @@ impl MeasureFlags {
             margin: self.margin,
             window_cycles: self.window,
             chart_index: None,
-            refine_roi: false,
+            refine_roi: !self.no_refine_roi,
         })
     }
 }

@@ -25,8 +25,12 @@ pub struct Args {
     /// Target description (chart TOML or sineMTF tgt.txt).
     #[arg(long, value_name = "FILE")]
     pub target: Option<PathBuf>,
-    /// Refine the --roi corners (good to about ±5 px) to the strip's or target's edges.
+    /// Use the --roi corners exactly as given (by default they are refined to the
+    /// strip's or target's edges, so that errors of ±5 px do not change the result).
     #[arg(long)]
+    pub no_refine_roi: bool,
+    /// Accepted for compatibility: refining the --roi corners is the default.
+    #[arg(long, hide = true, conflicts_with = "no_refine_roi")]
     pub refine_roi: bool,
     /// With several charts in the frame (found automatically): which one, 0 = leftmost.
     #[arg(long, value_name = "N")]
@@ -148,7 +152,7 @@ fn options(a: &Args) -> Result<MeasureOptions, CliError> {
         margin: a.margin,
         window_cycles: a.window,
         chart_index: a.chart_index,
-        refine_roi: a.refine_roi,
+        refine_roi: !a.no_refine_roi,
     })
 }
 

@@ -337,3 +337,103 @@ pub fn a4_log() -> Target {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("targets/a4_log.toml");
     Target::load(&p).expect("targets/a4_log.toml")
 }
+
+/// RMS |MTF − truth| of one sweep's measured curve over 0.01–0.45 cy/px (non-aliased).
+pub fn curve_rms(
+    m: &sweepmtf::measure::Measurement,
+    truth: &simulate::SweepTruth,
+    id: &str,
+) -> f64 {
+    let rows: Vec<(f64, f64)> = truth.rows.iter().map(|r| (r.freq_cy_px, r.mtf)).collect();
+    let Some(c) = m.curves.iter().find(|c| c.sweep_id == id) else {
+        return f64::NAN;
+    };
+    let e: Vec<f64> = c
+        .points
+        .iter()
+        .filter(|p| !p.aliased && (0.01..=0.45).contains(&p.freq_cy_px))
+        .map(|p| p.mtf - truth_at(&rows, p.freq_cy_px))
+        .collect();
+    if e.is_empty() {
+        return f64::NAN;
+    }
+    (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt()
+}
+
+/// `--roi` refinement on one shot: the main sweep's MTF RMS against the truth with
+/// the exact corners and with corners off by up to ±`off_px` in x and y, each
+/// without and with refinement, plus how far refinement left the corners from the
+/// truth (px, largest). `strip`: the corners are the main sweep strip's, without a
+/// target; else the target frame's, with the target.
+#[derive(Debug, Clone)]
+pub struct RefineTrial {
+    /// RMS: exact corners, no refinement.
+    pub exact: f64,
+    /// RMS: exact corners, refined.
+    pub exact_refined: f64,
+    /// RMS: jittered corners, no refinement.
+    pub jittered: f64,
+    /// RMS: jittered corners, refined.
+    pub jittered_refined: f64,
+    /// Largest corner error given, px.
+    pub given_err_px: f64,
+    /// Largest corner error after refinement, px.
+    pub refined_err_px: f64,
+    /// Warnings of the refined jittered run that mention the region.
+    pub notes: Vec<String>,
+}
+
+/// Runs one refinement trial (see [`RefineTrial`]).
+pub fn refine_trial(
+    target: &Target,
+    pose: &Pose,
+    strip: bool,
+    off_px: f64,
+    rng: &mut Rng,
+) -> Result<RefineTrial, String> {
+    let (shot, jpeg) = shoot(target, pose)?;
+    let dec = decode_bytes(&jpeg, "shot.jpg").map_err(|e| e.to_string())?;
+    let flat = if strip {
+        shot.sweeps[0].roi
+    } else {
+        shot.target_corners
+    };
+    let exact = [0, 1, 2, 3].map(|k| [flat[2 * k], flat[2 * k + 1]]);
+    let given = exact.map(|p| {
+        [
+            p[0] + rng.range(-off_px, off_px),
+            p[1] + rng.range(-off_px, off_px),
+        ]
+    });
+    let t = (!strip).then_some(target);
+    let measure = |roi: [[f64; 2]; 4], refine: bool| {
+        let o = MeasureOptions {
+            roi: Some(roi),
+            refine_roi: refine,
+            ..MeasureOptions::default()
+        };
+        measure_decoded(&dec, "shot.jpg", t, &o).map_err(|e| e.to_string())
+    };
+    let id = if strip { "strip" } else { "main" };
+    let truth = &shot.sweeps[0];
+    let err = |a: &[[f64; 2]; 4]| {
+        (0..4)
+            .map(|k| (a[k][0] - exact[k][0]).hypot(a[k][1] - exact[k][1]))
+            .fold(0.0, f64::max)
+    };
+    let refined = measure(given, true)?;
+    Ok(RefineTrial {
+        exact: curve_rms(&measure(exact, false)?, truth, id),
+        exact_refined: curve_rms(&measure(exact, true)?, truth, id),
+        jittered: curve_rms(&measure(given, false)?, truth, id),
+        jittered_refined: curve_rms(&refined, truth, id),
+        given_err_px: err(&given),
+        refined_err_px: err(&refined.roi),
+        notes: refined
+            .warnings
+            .iter()
+            .filter(|w| w.contains("region"))
+            .cloned()
+            .collect(),
+    })
+}
