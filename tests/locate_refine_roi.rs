@@ -138,3 +138,54 @@ fn real_scan_hand_corners_do_not_get_worse() {
         "{to_hand:.2} px from the hand corners"
     );
 }
+
+/// The CLI refines `--roi` corners by default and `--no-refine-roi` turns it off
+/// (the README sample's exact target corners, given 3–5 px off).
+#[test]
+fn cli_refines_by_default_and_opts_out() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root.join("testdata/a4_log_shot.json")).unwrap(),
+    )
+    .unwrap();
+    let exact: Vec<f64> = json["target_corners"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let offsets = [5.0, -4.0, -5.0, 3.0, 4.0, 5.0, -3.0, -5.0];
+    let roi: Vec<String> = exact
+        .iter()
+        .zip(offsets)
+        .map(|(v, d)| format!("{}", v + d))
+        .collect();
+    let run = |extra: &[&str]| {
+        let out = tempfile::tempdir().unwrap();
+        assert_cmd::Command::cargo_bin("sweepmtf")
+            .unwrap()
+            .current_dir(root)
+            .args([
+                "measure",
+                "testdata/a4_log_shot.jpg",
+                "--target",
+                "targets/a4_log.toml",
+                "--roi",
+            ])
+            .arg(roi.join(","))
+            .args(extra)
+            .arg("-o")
+            .arg(out.path())
+            .assert()
+            .success();
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.path().join("a4_log_shot.summary.json")).unwrap(),
+        )
+        .unwrap();
+        summary.to_string()
+    };
+    assert!(run(&[]).contains("region corners refined to the edges"));
+    assert!(!run(&["--no-refine-roi"]).contains("refined to the edges"));
+    // The old opt-in flag is still accepted.
+    assert!(run(&["--refine-roi"]).contains("region corners refined to the edges"));
+}

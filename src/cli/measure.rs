@@ -26,7 +26,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub target: Option<PathBuf>,
     /// Use the --roi corners exactly as given (by default they are refined to the
-    /// strip's or target's edges, so that errors of ±5 px do not change the result).
+    /// strip's or target's edges; with --target, errors of ±5 px are absorbed).
     #[arg(long)]
     pub no_refine_roi: bool,
     /// Accepted for compatibility: refining the --roi corners is the default.
