@@ -189,3 +189,63 @@ fn cli_refines_by_default_and_opts_out() {
     // The old opt-in flag is still accepted.
     assert!(run(&["--refine-roi"]).contains("region corners refined to the edges"));
 }
+
+/// Corners further off than the search range: refinement either refuses or stays
+/// within its bound of the given corners; it never jumps to some other edge far away.
+#[test]
+fn corners_far_off_are_never_moved_far() {
+    let target = sweep::a4_log();
+    let pose = Pose {
+        size: (900, 620),
+        rotate_deg: 12.0,
+        tilt_deg: 25.0,
+        tilt_axis_deg: 90.0,
+        cover: 0.5,
+        shift: [0.0, 0.0],
+        falloff: 0.2,
+        gradient: [0.1, 0.0],
+        exposure: 0.7,
+        full_well_e: 8000.0,
+        w020: 0.2,
+        seed: 3,
+    };
+    let (shot, jpeg) = sweep::shoot(&target, &pose).unwrap();
+    let dec = sweepmtf::photo::decode::decode_bytes(&jpeg, "shot.jpg").unwrap();
+    let img = image::load_from_memory(&jpeg).unwrap().to_luma8();
+    assert_eq!(
+        (img.width() as usize, img.height() as usize),
+        (dec.width, dec.height)
+    );
+    let lin = |c: u8| {
+        let c = c as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let plane = sweepmtf::photo::Plane::full(
+        dec.width,
+        dec.height,
+        img.pixels().map(|p| lin(p[0]) as f32).collect(),
+    );
+    let c = shot.target_corners;
+    let exact = [0, 1, 2, 3].map(|k| [c[2 * k], c[2 * k + 1]]);
+    let mut rng = Rng(5);
+    for _ in 0..6 {
+        let given = exact.map(|p| {
+            let (r, a) = (rng.range(14.0, 25.0), rng.range(0.0, std::f64::consts::TAU));
+            [p[0] + r * a.cos(), p[1] + r * a.sin()]
+        });
+        for t in [Some(&target), None] {
+            if let Ok(got) = sweepmtf::locate::refine_roi(&plane, given, t, 8.0) {
+                let moved = (0..4)
+                    .map(|k| (got[k][0] - given[k][0]).hypot(got[k][1] - given[k][1]))
+                    .fold(0.0, f64::max);
+                // √2·search + 2 px; a strip's ends are also moved in by the search range.
+                let bound = 8.0 * 2f64.sqrt() + 2.0 + if t.is_none() { 8.0 } else { 0.0 };
+                assert!(moved <= bound, "moved {moved:.1} px");
+            }
+        }
+    }
+}
