@@ -10,9 +10,6 @@ use sweepmtf::batch::{
     self, BatchError, Progress, RunOptions, Shard, ShotRecord, measure_job::MeasureJob,
     progress::progress_line, roi_file::RoiTable,
 };
-use sweepmtf::measure::{MeasureOptions, Method, SweepChoice};
-use sweepmtf::photo::linearise::Channel;
-use sweepmtf::report::mtf_plot::PlotFormat;
 
 /// Arguments of `sweepmtf batch`.
 #[derive(Debug, clap::Args)]
@@ -46,118 +43,7 @@ pub struct Args {
     pub quiet: bool,
     /// Measurement options (as `sweepmtf measure` takes them).
     #[command(flatten)]
-    pub measure: MeasureFlags,
-}
-
-/// The measurement options of `sweepmtf batch` (as `sweepmtf measure` takes them).
-#[derive(Debug, clap::Args)]
-pub struct MeasureFlags {
-    /// One region for every shot not listed in --roi-file: x1,y1,x2,y2,x3,y3,x4,y4
-    /// (image pixels, as `measure --roi`; e.g. a tripod series with fixed framing).
-    #[arg(long, value_name = "CORNERS", allow_hyphen_values = true, value_parser = super::measure::parse_roi)]
-    pub roi: Option<[[f64; 2]; 4]>,
-    /// Target description (chart TOML or sineMTF tgt.txt).
-    #[arg(long, value_name = "FILE")]
-    pub target: Option<PathBuf>,
-    /// Use the region corners exactly as given (by default they are refined to the edges).
-    #[arg(long)]
-    pub no_refine_roi: bool,
-    /// Modulation estimator: extrema | fit | envelope.
-    #[arg(long, default_value = "fit", value_name = "METHOD", value_parser = parse_method)]
-    pub method: Method,
-    /// Sweep law without a target: auto | linear | log.
-    #[arg(long, default_value = "auto", value_name = "LAW", value_parser = parse_sweep)]
-    pub sweep: SweepChoice,
-    /// Power-law tone instead of the default (1 = data already linear).
-    #[arg(long, value_name = "G")]
-    pub gamma: Option<f64>,
-    /// Tone curve: `chart` measures it from the target's grey/density patches.
-    #[arg(long, value_name = "chart", value_parser = parse_tone)]
-    pub tone: Option<bool>,
-    /// Channel: luma | r | g | b | all (raws: the green sites unless r, b or all).
-    #[arg(long, default_value = "luma", value_name = "CH", value_parser = parse_channel)]
-    pub channel: Channel,
-    /// Pixel pitch with a unit (e.g. 4.3um); default: from each shot's EXIF.
-    #[arg(long, value_name = "LENGTH")]
-    pub pixel_pitch: Option<String>,
-    /// Per-shot plot format: png | svg.
-    #[arg(long, default_value = "png", value_name = "FMT", value_parser = parse_plot)]
-    pub plot: PlotFormat,
-    /// Bin width along the sweep in pixels (advanced).
-    #[arg(long, default_value_t = 0.25, value_name = "PX")]
-    pub bin_px: f64,
-    /// Fraction of the strip width left out along each long edge (advanced).
-    #[arg(long, default_value_t = 0.15, value_name = "FRACTION")]
-    pub margin: f64,
-    /// Estimator window in cycles (advanced).
-    #[arg(long, default_value_t = 4.0, value_name = "CYCLES")]
-    pub window: f64,
-}
-
-fn parse_method(s: &str) -> Result<Method, String> {
-    Method::parse(s).ok_or_else(|| format!("'{s}': use extrema, fit or envelope"))
-}
-
-fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
-    match s {
-        "auto" => Ok(SweepChoice::Auto),
-        "linear" => Ok(SweepChoice::Linear),
-        "log" => Ok(SweepChoice::Log),
-        other => Err(format!("'{other}': use auto, linear or log")),
-    }
-}
-
-fn parse_channel(s: &str) -> Result<Channel, String> {
-    Channel::parse(s).ok_or_else(|| format!("'{s}': use luma, r, g, b or all"))
-}
-
-fn parse_tone(s: &str) -> Result<bool, String> {
-    match s {
-        "chart" => Ok(true),
-        other => Err(format!("'{other}': the only tone is 'chart'")),
-    }
-}
-
-fn parse_plot(s: &str) -> Result<PlotFormat, String> {
-    match s {
-        "png" => Ok(PlotFormat::Png),
-        "svg" => Ok(PlotFormat::Svg),
-        other => Err(format!("'{other}': use png or svg")),
-    }
-}
-
-impl MeasureFlags {
-    /// The measurement options (checked the way `measure` checks them).
-    fn options(&self) -> Result<MeasureOptions, CliError> {
-        let tone_chart = self.tone.unwrap_or(false);
-        if tone_chart && self.gamma.is_some() {
-            return Err(CliError::usage(
-                "--tone chart and --gamma exclude each other",
-            ));
-        }
-        let pixel_pitch_mm = match &self.pixel_pitch {
-            None => None,
-            Some(t) => Some(
-                sweepmtf::units::parse_length_mm(t)
-                    .map_err(|e| CliError::usage(format!("--pixel-pitch: {e}")))?,
-            ),
-        };
-        Ok(MeasureOptions {
-            roi: self.roi,
-            target: self.target.clone(),
-            method: self.method,
-            sweep: self.sweep,
-            gamma: self.gamma,
-            tone_chart,
-            channel: self.channel,
-            pixel_pitch_mm,
-            bin_px: self.bin_px,
-            margin: self.margin,
-            window_cycles: self.window,
-            chart_index: None,
-            refine_roi: !self.no_refine_roi,
-        })
-    }
+    pub measure: super::measure_flags::MeasureFlags,
 }
 
 fn parse_shard(s: &str) -> Result<Shard, String> {

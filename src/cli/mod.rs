@@ -8,6 +8,7 @@ mod chart;
 mod exit;
 mod factors;
 mod measure;
+mod measure_flags;
 mod measure_model;
 mod model;
 mod simulate;
@@ -44,12 +45,15 @@ pub fn main() -> std::process::ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
-            let _ = e.print();
             return match e.kind() {
                 clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                    let _ = e.print();
                     std::process::ExitCode::SUCCESS
                 }
-                _ => Code::Usage.into(),
+                _ => {
+                    eprintln!("sweepmtf: {}", one_line(&e.render().to_string()));
+                    Code::Usage.into()
+                }
             };
         }
     };
@@ -68,4 +72,20 @@ pub fn main() -> std::process::ExitCode {
             e.code.into()
         }
     }
+}
+
+/// A clap error as one line: its text up to the usage hint, without the "error:" prefix.
+fn one_line(text: &str) -> String {
+    let parts: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .filter(|l| !l.is_empty())
+        .collect();
+    let joined = parts.join(" ");
+    let line = joined
+        .strip_prefix("error: ")
+        .unwrap_or(&joined)
+        .to_string();
+    format!("{line} (see --help)")
 }

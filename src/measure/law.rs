@@ -51,8 +51,24 @@ impl PhaseLaw {
         }
     }
 
-    /// The s (within [lo, hi]) where the phase equals `phi` (bisection; the law is monotone there).
+    /// The s (within [lo, hi]) where the phase equals `phi`: the law's closed
+    /// inverse polished by Newton steps, or bisection where that fails (the
+    /// law is monotone on [lo, hi]).
     pub fn s_at_phase(&self, phi: f64, lo: f64, hi: f64) -> f64 {
+        if let Some(s) = self.invert(phi)
+            && s >= lo
+            && s <= hi
+        {
+            let mut s = s;
+            for _ in 0..2 {
+                let f = self.freq(s);
+                if !(f.is_finite() && f > 0.0) {
+                    break;
+                }
+                s = (s - (self.phase(s) - phi) / f).clamp(lo, hi);
+            }
+            return s;
+        }
         let (mut a, mut b) = (lo, hi);
         for _ in 0..80 {
             let m = 0.5 * (a + b);
@@ -63,6 +79,35 @@ impl PhaseLaw {
             }
         }
         0.5 * (a + b)
+    }
+
+    /// Closed inverse of the phase (None where it has no real solution).
+    fn invert(&self, phi: f64) -> Option<f64> {
+        let d = phi - self.c0;
+        let s = match self.kind {
+            // c2·s² + c1·s − d = 0, in the form without cancellation.
+            LawKind::Linear => {
+                let disc = self.c1 * self.c1 + 4.0 * self.c2 * d;
+                if disc < 0.0 {
+                    return None;
+                }
+                let q = self.c1 + disc.sqrt().copysign(self.c1);
+                if q == 0.0 {
+                    return None;
+                }
+                2.0 * d / q
+            }
+            // c1·(e^{k s} − 1)/k = d  ⇒  s = ln(1 + k d / c1)/k.
+            LawKind::Log => {
+                let x = self.c2 * d / self.c1;
+                if (self.c2 * d).abs() < 1e-300 || x.abs() < 1e-12 {
+                    d / self.c1
+                } else {
+                    x.ln_1p() / self.c2
+                }
+            }
+        };
+        s.is_finite().then_some(s)
     }
 }
 
@@ -372,16 +417,15 @@ fn crossings(d: &[f64], h: &[f64]) -> Vec<(f64, bool)> {
 /// (s, phase in cycles, weight) samples of a phase law.
 pub type PhasePoints = Vec<(f64, f64, f64)>;
 
-/// A first guess of the phase law from the profile's zero crossings, using the
-/// well-resolved low-frequency part (stops where the half-periods become
-/// irregular, the oscillation fades, or `max_cy_px` is reached).
-/// `s_per_px` gives strip units per pixel at s. Returns the (s, phase) points too.
-pub fn initial_law(
+/// The profile's zero crossings as (s, phase) points over the well-resolved
+/// low-frequency part (stops where the half-periods become irregular, the
+/// oscillation fades, or `max_cy_px` is reached). `s_per_px` gives strip
+/// units per pixel at s.
+fn crossing_points(
     prof: &Profile,
-    kind: Option<LawKind>,
     s_per_px: impl Fn(f64) -> f64,
     max_cy_px: f64,
-) -> Option<(PhaseLaw, PhasePoints)> {
+) -> Option<PhasePoints> {
     let (s0, ds, v) = uniform(prof);
     let n = v.len();
     if n < 16 {
@@ -433,15 +477,38 @@ pub fn initial_law(
     if pts.len() < 8 {
         return None;
     }
-    let kinds: Vec<LawKind> = match kind {
-        Some(k) => vec![k],
-        None => vec![LawKind::Linear, LawKind::Log],
+    Some(pts)
+}
+
+/// A first phase law from the profile's zero crossings: the best-fitting
+/// family (or `kind`) over the regularly spaced crossings, with those
+/// crossings as (s, phase, weight) points.
+pub fn initial_law(
+    prof: &Profile,
+    kind: Option<LawKind>,
+    s_per_px: impl Fn(f64) -> f64,
+    max_cy_px: f64,
+) -> Option<(PhaseLaw, PhasePoints)> {
+    let kinds: &[LawKind] = match &kind {
+        Some(k) => std::slice::from_ref(k),
+        None => &[LawKind::Linear, LawKind::Log],
     };
-    let best = kinds
-        .into_iter()
-        .filter_map(|k| fit_law(&pts, k))
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let (laws, pts) = initial_laws(prof, kinds, s_per_px, max_cy_px)?;
+    let best = laws.into_iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
     Some((best.0, pts))
+}
+
+/// First phase laws of each family in `kinds` (with their RMS residuals,
+/// cycles) from one search for the profile's zero crossings.
+pub fn initial_laws(
+    prof: &Profile,
+    kinds: &[LawKind],
+    s_per_px: impl Fn(f64) -> f64,
+    max_cy_px: f64,
+) -> Option<(Vec<(PhaseLaw, f64)>, PhasePoints)> {
+    let pts = crossing_points(prof, s_per_px, max_cy_px)?;
+    let laws: Vec<_> = kinds.iter().filter_map(|&k| fit_law(&pts, k)).collect();
+    (!laws.is_empty()).then_some((laws, pts))
 }
 
 /// Half a local period (in samples) at every sample, from crossings (which are half a period apart).
@@ -539,6 +606,41 @@ mod tests {
         assert_eq!(fit.kind, LawKind::Linear);
         for s in [100.0, 1000.0, 2000.0] {
             assert!((fit.freq(s) / law.freq(s) - 1.0).abs() < 0.01, "{s}");
+        }
+    }
+
+    #[test]
+    fn phase_inverse_matches_bisection_on_stiff_laws() {
+        // Truth by brute bisection on the phase itself (the law is monotone).
+        let bisect = |l: &PhaseLaw, phi: f64, lo: f64, hi: f64| {
+            let (mut a, mut b) = (lo, hi);
+            for _ in 0..200 {
+                let m = 0.5 * (a + b);
+                if l.phase(m) < phi { a = m } else { b = m }
+            }
+            0.5 * (a + b)
+        };
+        let laws = [
+            (LawKind::Linear, 0.3, 0.01, 2e-5),
+            (LawKind::Linear, -2.0, 0.02, 1e-14),
+            (LawKind::Linear, 0.0, 0.5, 0.0),
+            (LawKind::Linear, 0.1, 0.4, -5e-5), // falling chirp, monotone on [0, 1600]
+            (LawKind::Log, -0.1, 0.01, 0.0025),
+            (LawKind::Log, 0.2, 0.05, 1e-13),
+            (LawKind::Log, 0.0, 1e-3, 0.009),
+        ];
+        for (kind, c0, c1, c2) in laws {
+            let l = PhaseLaw { kind, c0, c1, c2 };
+            for s in [0.0, 1e-9, 3.7, 777.0, 1599.0, 1600.0] {
+                let phi = l.phase(s);
+                let got = l.s_at_phase(phi, 0.0, 1600.0);
+                let want = bisect(&l, phi, 0.0, 1600.0);
+                let tol = 1e-9 * (1.0 + s);
+                assert!((got - want).abs() <= tol, "{l:?} s={s}: {got} vs {want}");
+            }
+            // Outside the range: clamps like bisection does.
+            let got = l.s_at_phase(l.phase(0.0) - 5.0, 0.0, 1600.0);
+            assert!(got.abs() < 1e-9, "{l:?}: {got}");
         }
     }
 }

@@ -17,6 +17,7 @@ use crate::photo::linearise::{
     Channel, Crop, Tone, ToneCurve, default_tone, plane_names, planes, planes_within,
 };
 use crate::target::{Direction, Sweep, SweepLaw, Target, TargetError};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -446,15 +447,29 @@ pub fn measure_decoded(
         (t, d)
     };
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
-    // Convert only the region's rows spans (+2 px): the rest is never read.
+    // Convert only what binning reads: the rows' spans (+2 px) of the strips'
+    // and patches' binned regions.
+    let binned = binned_quads(&roi, target, opts.margin).map_err(err)?;
+    let crop = binned
+        .iter()
+        .map(|q| bbox_crop(q, dec.width, dec.height, 3.0))
+        .reduce(|a, b| Crop {
+            x0: a.x0.min(b.x0),
+            y0: a.y0.min(b.y0),
+            x1: a.x1.max(b.x1),
+            y1: a.y1.max(b.y1),
+        })
+        .unwrap_or(crop);
     let span = |y: usize| -> (usize, usize) {
         let yc = y as f64 + 0.5;
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
-        for dy in [-2.0, 0.0, 2.0] {
-            if let Some((a, b)) = profile::row_span(&roi, yc + dy) {
-                lo = lo.min(a);
-                hi = hi.max(b);
+        for q in &binned {
+            for dy in [-2.0, 0.0, 2.0] {
+                if let Some((a, b)) = profile::row_span(q, yc + dy) {
+                    lo = lo.min(a);
+                    hi = hi.max(b);
+                }
             }
         }
         if lo > hi {
@@ -589,6 +604,29 @@ fn strips(roi: &[Point; 4], target: Option<&Target>) -> Result<Vec<StripSpec>, F
                 .collect())
         }
     }
+}
+
+/// The image quadrilaterals binning reads: each strip and sine patch inside
+/// its long-edge margins.
+fn binned_quads(
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    margin: f64,
+) -> Result<Vec<[Point; 4]>, Failure> {
+    let m = margin.clamp(0.0, 0.45);
+    let inner = |st: &Strip| st.image_quad(m * st.width, (1.0 - m) * st.width);
+    let mut quads: Vec<[Point; 4]> = strips(roi, target)?.iter().map(|sp| inner(&sp.1)).collect();
+    if let Some(t) = target
+        && !t.patches.is_empty()
+    {
+        let h = target_homography(t, roi)?;
+        quads.extend(
+            t.patches
+                .iter()
+                .map(|p| inner(&rect_strip(&h, &p.rect, p.direction))),
+        );
+    }
+    Ok(quads)
 }
 
 /// The homography from the target frame (mm) to the image, given the target's corners in the image.
@@ -828,13 +866,12 @@ fn measure_strip(
     if let Some(l) = target_law {
         laws.push(l);
     } else {
-        for k in match kind {
-            Some(k) => vec![k],
-            None => vec![LawKind::Linear, LawKind::Log],
-        } {
-            if let Some((l, _)) = law::initial_law(&prof, Some(k), s_per_px, 0.3) {
-                laws.push(l);
-            }
+        let kinds: &[LawKind] = match &kind {
+            Some(k) => std::slice::from_ref(k),
+            None => &[LawKind::Linear, LawKind::Log],
+        };
+        if let Some((found, _)) = law::initial_laws(&prof, kinds, s_per_px, 0.3) {
+            laws.extend(found.into_iter().map(|(l, _)| l));
         }
     }
     if laws.is_empty() {
@@ -844,15 +881,17 @@ fn measure_strip(
     }
     // Refine each candidate; keep the one explaining the most phase with the least residual.
     let mut best: Option<(PhaseLaw, f64, usize)> = None;
-    for l in laws {
-        if let Some(r) = refine_law(&prof, l, &s_per_px, &band_limit) {
-            let better = match &best {
-                None => true,
-                Some(b) => r.2 > b.2 + b.2 / 10 || (r.2 + r.2 / 10 >= b.2 && r.1 < b.1),
-            };
-            if better {
-                best = Some(r);
-            }
+    let refined: Vec<_> = laws
+        .par_iter()
+        .filter_map(|&l| refine_law(&prof, l, &s_per_px, &band_limit))
+        .collect();
+    for r in refined {
+        let better = match &best {
+            None => true,
+            Some(b) => r.2 > b.2 + b.2 / 10 || (r.2 + r.2 / 10 >= b.2 && r.1 < b.1),
+        };
+        if better {
+            best = Some(r);
         }
     }
     let Some((law, _, n_resolved)) = best else {
@@ -1011,8 +1050,16 @@ fn refine_law(
             return result;
         }
         let (l, rms) = law::fit_law(&pts, law.kind)?;
+        // Converged when the new law moves no fitted point's phase by 1/1000 cycle.
+        let moved = pts
+            .iter()
+            .map(|&(s, _, _)| (l.phase(s) - law.phase(s)).abs())
+            .fold(0.0, f64::max);
         law = l;
         result = Some((law, rms, pts.len()));
+        if moved < 1e-3 {
+            break;
+        }
     }
     result
 }

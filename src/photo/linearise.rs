@@ -10,6 +10,7 @@
 
 use super::Plane;
 use super::decode::{Decoded, Samples};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Rec. 709 / sRGB luminance weights of linear R, G, B.
@@ -216,7 +217,7 @@ pub fn planes_within(
     crop: Crop,
     tone: &Tone,
     channel: Channel,
-    span: &dyn Fn(usize) -> (usize, usize),
+    span: &(dyn Fn(usize) -> (usize, usize) + Sync),
 ) -> Vec<Plane> {
     let (w, h) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
     let levels = match dec.samples {
@@ -224,49 +225,74 @@ pub fn planes_within(
         Samples::U16(_) => 65536,
     };
     let lut = tone.lut(levels);
-    let code = |x: usize, y: usize, c: usize| -> usize {
-        let i = (y * dec.width + x) * dec.channels + c;
-        match &dec.samples {
-            Samples::U8(v) => v[i] as usize,
-            Samples::U16(v) => v[i] as usize,
+    let nc = dec.channels;
+    // Which channels feed the planes, and with what weight.
+    let mixes: Vec<Vec<(usize, f32)>> = if nc == 1 {
+        vec![vec![(0, 1.0)]]
+    } else {
+        match channel {
+            Channel::R => vec![vec![(0, 1.0)]],
+            Channel::G => vec![vec![(1, 1.0)]],
+            Channel::B => vec![vec![(2, 1.0)]],
+            Channel::All => (0..3).map(|c| vec![(c, 1.0)]).collect(),
+            Channel::Luma => vec![(0..3).map(|c| (c, LUMA_WEIGHTS[c])).collect()],
         }
     };
-    let cols = |y: usize| {
-        let (a, b) = span(y);
-        (a.clamp(crop.x0, crop.x1), b.clamp(crop.x0, crop.x1))
-    };
-    let fill = |value: &dyn Fn(usize, usize) -> f32| -> Vec<f32> {
-        let mut out = vec![0f32; w * h];
-        for y in crop.y0..crop.y1 {
-            let (a, b) = cols(y);
-            let row = &mut out[(y - crop.y0) * w..(y - crop.y0 + 1) * w];
-            for x in a..b {
-                row[x - crop.x0] = value(x, y);
+    mixes
+        .iter()
+        .map(|mix| {
+            let mut out = vec![0f32; w * h];
+            out.par_chunks_mut(w).enumerate().for_each(|(dy, row)| {
+                let y = crop.y0 + dy;
+                let (a, b) = span(y);
+                let (a, b) = (a.clamp(crop.x0, crop.x1), b.clamp(crop.x0, crop.x1));
+                if a >= b {
+                    return;
+                }
+                let row = &mut row[a - crop.x0..b - crop.x0];
+                let src = (y * dec.width + a) * nc..(y * dec.width + b) * nc;
+                match &dec.samples {
+                    Samples::U8(v) => convert_row(row, &v[src], nc, mix, &lut),
+                    Samples::U16(v) => convert_row(row, &v[src], nc, mix, &lut),
+                }
+            });
+            Plane {
+                width: w,
+                height: h,
+                step: (1, 1),
+                offset: (crop.x0, crop.y0),
+                data: out,
+            }
+        })
+        .collect()
+}
+
+/// Converts one row of interleaved codes to a weighted sum of linear channels.
+#[inline]
+fn convert_row<T: Copy + Into<usize>>(
+    out: &mut [f32],
+    codes: &[T],
+    nc: usize,
+    mix: &[(usize, f32)],
+    lut: &[f32],
+) {
+    let px = codes.chunks_exact(nc);
+    match mix {
+        [(c, _)] => {
+            for (o, p) in out.iter_mut().zip(px) {
+                *o = lut[p[*c].into()];
             }
         }
-        out
-    };
-    let wrap = |data: Vec<f32>| Plane {
-        width: w,
-        height: h,
-        step: (1, 1),
-        offset: (crop.x0, crop.y0),
-        data,
-    };
-    let one = |c: usize| wrap(fill(&|x, y| lut[code(x, y, c)]));
-    if dec.channels == 1 {
-        return vec![one(0)];
-    }
-    match channel {
-        Channel::R => vec![one(0)],
-        Channel::G => vec![one(1)],
-        Channel::B => vec![one(2)],
-        Channel::All => (0..3).map(one).collect(),
-        Channel::Luma => vec![wrap(fill(&|x, y| {
-            LUMA_WEIGHTS[0] * lut[code(x, y, 0)]
-                + LUMA_WEIGHTS[1] * lut[code(x, y, 1)]
-                + LUMA_WEIGHTS[2] * lut[code(x, y, 2)]
-        }))],
+        [(c0, w0), (c1, w1), (c2, w2)] => {
+            for (o, p) in out.iter_mut().zip(px) {
+                *o = w0 * lut[p[*c0].into()] + w1 * lut[p[*c1].into()] + w2 * lut[p[*c2].into()];
+            }
+        }
+        _ => {
+            for (o, p) in out.iter_mut().zip(px) {
+                *o = mix.iter().map(|&(c, wt)| wt * lut[p[c].into()]).sum();
+            }
+        }
     }
 }
 

@@ -12,6 +12,7 @@
 use super::{Estimator, ModPoint, bin_attenuation};
 use crate::measure::law::PhaseLaw;
 use crate::measure::profile::Profile;
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// The windowed sine-fit estimator.
@@ -78,7 +79,7 @@ impl PhaseTable {
             } else {
                 1.0
             };
-            let (sn, cs) = (2.0 * PI * ph.rem_euclid(1.0)).sin_cos();
+            let (sn, cs) = (2.0 * PI * (ph - ph.floor())).sin_cos();
             phase.push(ph);
             cos.push(att * cs);
             sin.push(att * sn);
@@ -233,7 +234,7 @@ impl Estimator for SineFit {
 
     fn estimate(&self, prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<ModPoint> {
         let table = PhaseTable::new(prof, law);
-        grid.iter()
+        grid.par_iter()
             .filter_map(|&s0| {
                 let f = local_fit(prof, &table, law, s0, 0.5 * self.window_cycles)?;
                 (f.mean > 0.0 && f.cycles >= 0.8 * self.window_cycles.min(3.0)).then(|| ModPoint {

@@ -1,0 +1,141 @@
+//! The measurement flags `sweepmtf measure` and `sweepmtf batch` share, and
+//! their check into [`MeasureOptions`].
+
+use super::CliError;
+use std::path::PathBuf;
+use sweepmtf::measure::{MeasureOptions, Method, SweepChoice};
+use sweepmtf::photo::linearise::Channel;
+use sweepmtf::report::mtf_plot::PlotFormat;
+
+/// Measurement flags (flattened into `measure` and `batch`).
+#[derive(Debug, clap::Args)]
+pub struct MeasureFlags {
+    /// Region corners in image pixels, x1,y1,x2,y2,x3,y3,x4,y4 (origin top-left, y down).
+    /// Without --target: one sweep strip, going round it, corners 1 and 4 on the
+    /// low-frequency edge. With --target: the target frame's corners (0,0),(w,0),(w,h),(0,h).
+    /// In `batch`: for every shot not listed in --roi-file (e.g. a tripod series).
+    #[arg(long, value_name = "CORNERS", allow_hyphen_values = true, value_parser = parse_roi)]
+    pub roi: Option<[[f64; 2]; 4]>,
+    /// Target description (chart TOML or sineMTF tgt.txt).
+    #[arg(long, value_name = "FILE")]
+    pub target: Option<PathBuf>,
+    /// Use the --roi corners exactly as given (by default they are refined to the
+    /// strip's or target's edges; with --target, errors of ±5 px are absorbed).
+    #[arg(long)]
+    pub no_refine_roi: bool,
+    /// Accepted for compatibility: refining the --roi corners is the default.
+    #[arg(long, hide = true, conflicts_with = "no_refine_roi")]
+    pub refine_roi: bool,
+    /// With several charts in the frame (found automatically): which one, 0 = leftmost.
+    #[arg(long, value_name = "N")]
+    pub chart_index: Option<usize>,
+    /// Modulation estimator: extrema | fit | envelope.
+    #[arg(long, default_value = "fit", value_name = "METHOD", value_parser = parse_method)]
+    pub method: Method,
+    /// Sweep law without a target: auto | linear | log.
+    #[arg(long, default_value = "auto", value_name = "LAW", value_parser = parse_sweep)]
+    pub sweep: SweepChoice,
+    /// Power-law tone instead of the default (1 = data already linear).
+    #[arg(long, value_name = "G")]
+    pub gamma: Option<f64>,
+    /// Tone curve: `chart` measures it from the target's grey/density patches.
+    #[arg(long, value_name = "chart", value_parser = parse_tone)]
+    pub tone: Option<bool>,
+    /// Channel: luma | r | g | b | all (raws: the green sites unless r, b or all).
+    #[arg(long, default_value = "luma", value_name = "CH", value_parser = parse_channel)]
+    pub channel: Channel,
+    /// Pixel pitch with a unit (e.g. 4.3um), for cycles/mm on the sensor; default: from the EXIF.
+    #[arg(long, value_name = "LENGTH")]
+    pub pixel_pitch: Option<String>,
+    /// Plot format: png | svg.
+    #[arg(long, default_value = "png", value_name = "FMT", value_parser = parse_plot)]
+    pub plot: PlotFormat,
+    /// Bin width along the sweep in pixels (advanced).
+    #[arg(long, default_value_t = 0.25, value_name = "PX")]
+    pub bin_px: f64,
+    /// Fraction of the strip width left out along each long edge (advanced).
+    #[arg(long, default_value_t = 0.15, value_name = "FRACTION")]
+    pub margin: f64,
+    /// Estimator window in cycles (advanced).
+    #[arg(long, default_value_t = 4.0, value_name = "CYCLES")]
+    pub window: f64,
+}
+
+impl MeasureFlags {
+    /// The measurement options, with the checks the library leaves to the command line.
+    pub fn options(&self) -> Result<MeasureOptions, CliError> {
+        let tone_chart = self.tone.unwrap_or(false);
+        if tone_chart && self.gamma.is_some() {
+            return Err(CliError::usage(
+                "--tone chart and --gamma exclude each other",
+            ));
+        }
+        let pixel_pitch_mm = match &self.pixel_pitch {
+            None => None,
+            Some(t) => Some(
+                sweepmtf::units::parse_length_mm(t)
+                    .map_err(|e| CliError::usage(format!("--pixel-pitch: {e}")))?,
+            ),
+        };
+        Ok(MeasureOptions {
+            roi: self.roi,
+            target: self.target.clone(),
+            method: self.method,
+            sweep: self.sweep,
+            gamma: self.gamma,
+            tone_chart,
+            channel: self.channel,
+            pixel_pitch_mm,
+            bin_px: self.bin_px,
+            margin: self.margin,
+            window_cycles: self.window,
+            chart_index: self.chart_index,
+            refine_roi: !self.no_refine_roi,
+        })
+    }
+}
+
+/// Parses `x1,y1,…,x4,y4` into four corners.
+pub fn parse_roi(text: &str) -> Result<[[f64; 2]; 4], String> {
+    let v: Result<Vec<f64>, _> = text.split(',').map(|t| t.trim().parse::<f64>()).collect();
+    match v {
+        Ok(v) if v.len() == 8 && v.iter().all(|x| x.is_finite()) => {
+            Ok([[v[0], v[1]], [v[2], v[3]], [v[4], v[5]], [v[6], v[7]]])
+        }
+        _ => Err(format!(
+            "'{text}': expected eight numbers x1,y1,x2,y2,x3,y3,x4,y4 (image pixels)"
+        )),
+    }
+}
+
+fn parse_method(s: &str) -> Result<Method, String> {
+    Method::parse(s).ok_or_else(|| format!("'{s}': use extrema, fit or envelope"))
+}
+
+fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
+    match s {
+        "auto" => Ok(SweepChoice::Auto),
+        "linear" => Ok(SweepChoice::Linear),
+        "log" => Ok(SweepChoice::Log),
+        other => Err(format!("'{other}': use auto, linear or log")),
+    }
+}
+
+fn parse_channel(s: &str) -> Result<Channel, String> {
+    Channel::parse(s).ok_or_else(|| format!("'{s}': use luma, r, g, b or all"))
+}
+
+fn parse_tone(s: &str) -> Result<bool, String> {
+    match s {
+        "chart" => Ok(true),
+        other => Err(format!("'{other}': the only tone is 'chart'")),
+    }
+}
+
+fn parse_plot(s: &str) -> Result<PlotFormat, String> {
+    match s {
+        "png" => Ok(PlotFormat::Png),
+        "svg" => Ok(PlotFormat::Svg),
+        other => Err(format!("'{other}': use png or svg")),
+    }
+}
