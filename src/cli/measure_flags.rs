@@ -19,8 +19,12 @@ pub struct MeasureFlags {
     /// Target description (chart TOML or sineMTF tgt.txt).
     #[arg(long, value_name = "FILE")]
     pub target: Option<PathBuf>,
-    /// Refine the --roi corners (good to about ±5 px) to the strip's or target's edges.
+    /// Use the --roi corners exactly as given (by default they are refined to the
+    /// strip's or target's edges; with --target, errors of ±5 px are absorbed).
     #[arg(long)]
+    pub no_refine_roi: bool,
+    /// Accepted for compatibility: refining the --roi corners is the default.
+    #[arg(long, hide = true, conflicts_with = "no_refine_roi")]
     pub refine_roi: bool,
     /// With several charts in the frame (found automatically): which one, 0 = leftmost.
     #[arg(long, value_name = "N")]
@@ -86,7 +90,7 @@ impl MeasureFlags {
             margin: self.margin,
             window_cycles: self.window,
             chart_index: self.chart_index,
-            refine_roi: self.refine_roi,
+            refine_roi: !self.no_refine_roi,
         })
     }
 }

@@ -232,8 +232,11 @@ fn not_found(target: &Target, candidates: Vec<Candidate>) -> LocateError {
 /// about `search_px`) to the region's straight edges, to sub-pixel precision.
 ///
 /// With `target`, the corners are the target frame's (0,0), (w,0), (w,h), (0,h) and
-/// every straight edge of its sweeps, patches and grey patches is used; without, the
-/// corners are those of one strip and its own four edges are used.
+/// every straight edge of its sweeps, patches and grey patches is used (each with
+/// the polarity the target gives it); without, the corners are those of one strip:
+/// its long edges are refined and its ends are moved inward by `search_px`.
+/// Errors (edges not clearly seen, ambiguous, or corners that would move further
+/// than `search_px` allows) leave the caller to use the corners as given.
 pub fn refine_roi(
     plane: &Plane,
     corners: [Point; 4],

@@ -23,8 +23,21 @@ pub struct EdgeObs {
     pub p: Point,
 }
 
-/// Target segments worth fitting: sides of every region, with the contrast across them.
-pub fn target_segments(t: &Target) -> Vec<(Point, Point)> {
+/// A straight edge of the target (or of a strip) to look for in the image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    /// Start (target units).
+    pub a: Point,
+    /// End (target units).
+    pub b: Point,
+    /// Whether the outside (the left of a → b in a y-down frame, i.e. outward of a
+    /// clockwise rectangle) is brighter than the inside; `None` when not known.
+    pub outside_brighter: Option<bool>,
+}
+
+/// Target segments worth fitting: sides of every region with contrast across them,
+/// each with the side that is brighter.
+pub fn target_segments(t: &Target) -> Vec<Segment> {
     let mut rects: Vec<crate::target::Rect> = t.sweeps.iter().map(|s| s.rect).collect();
     rects.extend(t.patches.iter().map(|p| p.rect));
     rects.extend(t.greys.iter().map(|g| g.rect));
@@ -47,91 +60,165 @@ pub fn target_segments(t: &Target) -> Vec<(Point, Point)> {
                 outside += t.reflectance(p[0] + off * n[0], p[1] + off * n[1]);
             }
             if ((inside - outside) / k as f64).abs() >= 0.15 {
-                out.push((a, b));
+                out.push(Segment {
+                    a,
+                    b,
+                    outside_brighter: Some(outside > inside),
+                });
             }
         }
     }
     out
 }
 
-/// Searches every segment for its edge in the image around its predicted place.
+/// The strongest gradient extremum of sign `sign` (+1 or −1) in `grad`, sub-sample
+/// by a parabola, or `None` when it is at the window's end, weak against the
+/// window's median, or ambiguous (another extremum of that sign at least 0.7 as
+/// strong more than `apart` samples away).
+fn pick_peak(grad: &[f64], sign: f64, apart: usize) -> Option<f64> {
+    let (imax, gmax) = grad
+        .iter()
+        .map(|v| v * sign)
+        .enumerate()
+        .max_by(|x, y| x.1.total_cmp(&y.1))?;
+    if gmax <= 1e-6 || imax == 0 || imax + 1 == grad.len() {
+        return None;
+    }
+    let mut abs: Vec<f64> = grad.iter().map(|v| v.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    if gmax < 3.0 * abs[abs.len() / 2] {
+        return None;
+    }
+    let rival = (1..grad.len() - 1).any(|i| {
+        let v = grad[i] * sign;
+        i.abs_diff(imax) > apart
+            && v >= 0.7 * gmax
+            && v >= grad[i - 1] * sign
+            && v >= grad[i + 1] * sign
+    });
+    if rival {
+        return None;
+    }
+    let (g0, g1, g2) = (grad[imax - 1] * sign, gmax, grad[imax + 1] * sign);
+    let den = g0 - 2.0 * g1 + g2;
+    let sub = if den < 0.0 {
+        0.5 * (g0 - g2) / den
+    } else {
+        0.0
+    };
+    Some(imax as f64 + sub.clamp(-0.5, 0.5))
+}
+
+/// The first gradient extremum met going outward from the inside end of the window
+/// (`from_start`: the inside is at index 0) that is at least half the window's
+/// strongest and 3× its median, sub-sample by a parabola: the region's own edge
+/// when the polarity is not known and another edge may lie beyond it.
+fn pick_first(grad: &[f64], from_start: bool) -> Option<f64> {
+    let abs: Vec<f64> = grad.iter().map(|v| v.abs()).collect();
+    let mut sorted = abs.clone();
+    sorted.sort_by(f64::total_cmp);
+    let thr = (0.5 * sorted[sorted.len() - 1]).max(3.0 * sorted[sorted.len() / 2]);
+    if thr <= 1e-6 {
+        return None;
+    }
+    let n = abs.len();
+    let order: Box<dyn Iterator<Item = usize>> = if from_start {
+        Box::new(1..n - 1)
+    } else {
+        Box::new((1..n - 1).rev())
+    };
+    for i in order {
+        if abs[i] >= thr && abs[i] >= abs[i - 1] && abs[i] >= abs[i + 1] {
+            let den = abs[i - 1] - 2.0 * abs[i] + abs[i + 1];
+            let sub = if den < 0.0 {
+                0.5 * (abs[i - 1] - abs[i + 1]) / den
+            } else {
+                0.0
+            };
+            return Some(i as f64 + sub.clamp(-0.5, 0.5));
+        }
+    }
+    None
+}
+
+/// Searches every segment for its edge in the image around its predicted place
+/// (±`search_px` along the normal): the strongest gradient of the segment's
+/// polarity when the target gives it (with `skip_ambiguous`, samples with a rival
+/// edge of that polarity in the window are skipped), else the first strong edge
+/// going outward from the inside.
 pub fn collect_edges(
     g: &Gray<'_>,
-    segments: &[(Point, Point)],
+    segments: &[Segment],
     h: &Homography,
     search_px: f64,
+    skip_ambiguous: bool,
 ) -> Vec<EdgeObs> {
     let mut out = Vec::new();
     let step = 0.5;
     let m = (search_px / step).ceil() as i64;
-    for &(a, b) in segments {
+    for seg in segments {
+        let (a, b) = (seg.a, seg.b);
         let (ia, ib) = (h.apply(a), h.apply(b));
         let len = (ib[0] - ia[0]).hypot(ib[1] - ia[1]);
         if !len.is_finite() || len < 8.0 {
             continue;
         }
         let n = [-(ib[1] - ia[1]) / len, (ib[0] - ia[0]) / len];
+        // Which way along n is outward in the image (a mirror flips it).
+        let outward = {
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let mid = [a[0] + 0.5 * dx, a[1] + 0.5 * dy];
+            let o = [mid[0] + 1e-3 * dy, mid[1] - 1e-3 * dx];
+            let (pm, po) = (h.apply(mid), h.apply(o));
+            if (po[0] - pm[0]) * n[0] + (po[1] - pm[1]) * n[1] >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            }
+        };
         let count = ((len / 3.0) as usize).clamp(4, 200);
-        let mut found: Vec<(f64, Point, f64)> = Vec::new(); // (signed grad, point, sharpness)
+        let mut profiles: Vec<(Point, Vec<f64>)> = Vec::with_capacity(count);
         for j in 0..count {
             let f = 0.08 + 0.84 * (j as f64 + 0.5) / count as f64;
             // Along the segment in target units, mapped (straight lines stay straight).
             let tp = [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])];
             let q = h.apply(tp);
-            let mut prof = Vec::with_capacity((2 * m + 5) as usize);
-            let mut ok = true;
-            for i in -m - 2..=m + 2 {
-                let t = i as f64 * step;
-                match g.at_img([q[0] + t * n[0], q[1] + t * n[1]]) {
-                    Some(v) => prof.push(v),
-                    None => {
-                        ok = false;
-                        break;
-                    }
-                }
-            }
-            if !ok {
-                continue;
-            }
-            let grad: Vec<f64> = (1..prof.len() - 1)
-                .map(|i| (prof[i + 1] - prof[i - 1]) / (2.0 * step))
+            let prof: Option<Vec<f64>> = (-m - 2..=m + 2)
+                .map(|i| {
+                    let t = i as f64 * step;
+                    g.at_img([q[0] + t * n[0], q[1] + t * n[1]])
+                })
                 .collect();
-            let (imax, gmax) = grad
-                .iter()
-                .enumerate()
-                .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
-                .map(|(i, v)| (i, *v))
-                .unwrap();
-            if imax == 0 || imax + 1 == grad.len() {
-                continue;
+            if let Some(prof) = prof {
+                let grad: Vec<f64> = (1..prof.len() - 1)
+                    .map(|i| (prof[i + 1] - prof[i - 1]) / (2.0 * step))
+                    .collect();
+                profiles.push((q, grad));
             }
-            let mut abs: Vec<f64> = grad.iter().map(|v| v.abs()).collect();
-            abs.sort_by(f64::total_cmp);
-            let med = abs[abs.len() / 2];
-            if gmax.abs() < 3.0 * med || gmax.abs() < 1e-6 {
-                continue;
-            }
-            let (g0, g1, g2) = (grad[imax - 1].abs(), gmax.abs(), grad[imax + 1].abs());
-            let den = g0 - 2.0 * g1 + g2;
-            let sub = if den < 0.0 {
-                0.5 * (g0 - g2) / den
-            } else {
-                0.0
-            };
-            // grad index i ↔ profile index i+1 ↔ t = (i + 1 − m − 2)·step
-            let t = (imax as f64 + 1.0 + sub.clamp(-0.5, 0.5) - (m + 2) as f64) * step;
-            found.push((
-                gmax,
-                [q[0] + t * n[0], q[1] + t * n[1]],
-                gmax.abs() / med.max(1e-9),
-            ));
         }
-        // Keep the majority polarity.
-        let pos = found.iter().filter(|x| x.0 > 0.0).count();
-        let want_pos = 2 * pos >= found.len();
-        for (gv, p, _) in found {
-            if (gv > 0.0) == want_pos {
-                out.push(EdgeObs { a, b, p });
+        let sign = match seg.outside_brighter {
+            Some(brighter) => outward * if brighter { 1.0 } else { -1.0 },
+            None => 0.0,
+        };
+        let apart = if skip_ambiguous {
+            (2.5 / step) as usize
+        } else {
+            usize::MAX
+        };
+        for (q, grad) in &profiles {
+            let found = if sign == 0.0 {
+                pick_first(grad, outward > 0.0)
+            } else {
+                pick_peak(grad, sign, apart)
+            };
+            if let Some(i) = found {
+                // grad index i ↔ profile index i+1 ↔ t = (i + 1 − m − 2)·step
+                let t = (i + 1.0 - (m + 2) as f64) * step;
+                out.push(EdgeObs {
+                    a,
+                    b,
+                    p: [q[0] + t * n[0], q[1] + t * n[1]],
+                });
             }
         }
     }
@@ -318,19 +405,44 @@ pub fn fit_target_edges(
     };
     let mut h = h0;
     for search in [0.04 * span, 0.01 * span + 2.0, 3.0] {
-        let edges = collect_edges(full, &segs, &h, search.max(3.0));
+        let edges = collect_edges(full, &segs, &h, search.max(3.0), false);
         let edges = prune(&h, edges, search.max(3.0));
         if edges.len() < 12 {
             return None;
         }
         h = fit_homography(h, &edges, fixed);
     }
-    let edges = prune(&h, collect_edges(full, &segs, &h, 3.0), 1.5);
+    let edges = prune(&h, collect_edges(full, &segs, &h, 3.0, false), 1.5);
     if edges.len() < 12 {
         return None;
     }
     h = fit_homography(h, &edges, fixed);
     Some((h, edges.len()))
+}
+
+/// Keeps the points of segments seen as straight lines: at least `min_pts`
+/// points lying within 1 px RMS of their own line.
+fn keep_straight(edges: Vec<EdgeObs>, min_pts: usize) -> Vec<EdgeObs> {
+    let mut keep = vec![false; edges.len()];
+    for i in 0..edges.len() {
+        if keep[i] {
+            continue;
+        }
+        let same: Vec<usize> = (i..edges.len())
+            .filter(|&j| edges[j].a == edges[i].a && edges[j].b == edges[i].b)
+            .collect();
+        let pts: Vec<Point> = same.iter().map(|&j| edges[j].p).collect();
+        if pts.len() >= min_pts && line_rms(&pts) <= 1.0 {
+            for j in same {
+                keep[j] = true;
+            }
+        }
+    }
+    edges
+        .into_iter()
+        .zip(keep)
+        .filter_map(|(e, k)| k.then_some(e))
+        .collect()
 }
 
 /// See [`super::refine_roi`].
@@ -340,6 +452,7 @@ pub fn refine_roi(
     target: Option<&Target>,
     search_px: f64,
 ) -> Result<[Point; 4], LocateError> {
+    let fail = |m: String| Err(LocateError::Refine(m));
     check_quad(&corners).map_err(|e| LocateError::Refine(e.to_string()))?;
     let full = Gray::of_plane(plane);
     let (src, segs) = match target {
@@ -349,68 +462,125 @@ pub fn refine_roi(
         ),
         None => {
             let s = rect_corners(0.0, 0.0, 1.0, 1.0);
-            (s, (0..4).map(|i| (s[i], s[(i + 1) % 4])).collect())
+            let segs = (0..4)
+                .step_by(2)
+                .map(|i| Segment {
+                    a: s[i],
+                    b: s[(i + 1) % 4],
+                    outside_brighter: None,
+                })
+                .collect();
+            (s, segs)
         }
     };
     if segs.len() < 4 && target.is_some() {
-        return Err(LocateError::Refine(
-            "the target has too few straight edges with contrast".into(),
-        ));
+        return fail("the target has too few straight edges with contrast".into());
     }
     let mut h =
         Homography::from_quads(&src, &corners).map_err(|e| LocateError::Refine(e.to_string()))?;
+    let centre = [
+        corners.iter().map(|c| c[0]).sum::<f64>() / 4.0,
+        corners.iter().map(|c| c[1]).sum::<f64>() / 4.0,
+    ];
     let search = search_px.max(2.0) + 2.0;
+    let mut seen_edges = Vec::new();
     for s in [search, 3.0, 2.0] {
-        let mut edges = prune(&h, collect_edges(&full, &segs, &h, s), s);
-        if target.is_none() {
-            // A side whose edge is not clearly seen (e.g. a sweep's low-frequency end, which
-            // starts at a bright peak) keeps the user's line.
+        let mut edges = prune(&h, collect_edges(&full, &segs, &h, s, true), s);
+        if let Some(t) = target {
+            edges = keep_straight(edges, 4);
+            // Both directions of the target's edges must be seen to fix the homography.
+            let mut dirs = [0usize; 2];
+            for seg in &segs {
+                if edges.iter().any(|o| o.a == seg.a && o.b == seg.b) {
+                    let horizontal = (seg.b[0] - seg.a[0]).abs() >= (seg.b[1] - seg.a[1]).abs();
+                    dirs[usize::from(horizontal)] += 1;
+                }
+            }
+            if edges.len() < 12 || dirs[0] < 2 || dirs[1] < 2 {
+                return fail(format!(
+                    "the edges of '{}' are not clearly seen near the given corners \
+                     ({} edge points on {} vertical and {} horizontal sides)",
+                    t.name,
+                    edges.len(),
+                    dirs[0],
+                    dirs[1]
+                ));
+            }
+            seen_edges = edges.clone();
+        } else {
+            edges = keep_straight(edges, 6);
+            seen_edges = edges.clone();
+            // A long side whose edge is not clearly seen keeps the user's line. The ends
+            // are not searched (a sweep's low-frequency end starts at a bright peak, its
+            // high-frequency end fades to grey, and the target's border may lie just
+            // beyond): they keep the user's lines moved inward by the search range, so
+            // that no surround is measured as sweep.
             let mut seen = 0;
-            for (i, &(a, b)) in segs.iter().enumerate() {
-                let pts: Vec<Point> = edges
-                    .iter()
-                    .filter(|o| o.a == a && o.b == b)
-                    .map(|o| o.p)
-                    .collect();
-                if pts.len() >= 6 && line_rms(&pts) <= 1.0 {
+            for i in 0..4 {
+                let (sa, sb) = (src[i], src[(i + 1) % 4]);
+                if edges.iter().any(|o| o.a == sa && o.b == sb) {
                     seen += 1;
                     continue;
                 }
-                edges.retain(|o| !(o.a == a && o.b == b));
                 let (ca, cb) = (corners[i], corners[(i + 1) % 4]);
+                let shift = if i % 2 == 1 {
+                    let (dx, dy) = (cb[0] - ca[0], cb[1] - ca[1]);
+                    let len = dx.hypot(dy).max(1e-9);
+                    let mut nn = [-dy / len, dx / len];
+                    let mid = [(ca[0] + cb[0]) / 2.0, (ca[1] + cb[1]) / 2.0];
+                    if (centre[0] - mid[0]) * nn[0] + (centre[1] - mid[1]) * nn[1] < 0.0 {
+                        nn = [-nn[0], -nn[1]];
+                    }
+                    [search_px * nn[0], search_px * nn[1]]
+                } else {
+                    [0.0, 0.0]
+                };
                 for k in 0..10 {
                     let f = (k as f64 + 0.5) / 10.0;
                     edges.push(EdgeObs {
-                        a,
-                        b,
-                        p: [ca[0] + f * (cb[0] - ca[0]), ca[1] + f * (cb[1] - ca[1])],
+                        a: sa,
+                        b: sb,
+                        p: [
+                            ca[0] + f * (cb[0] - ca[0]) + shift[0],
+                            ca[1] + f * (cb[1] - ca[1]) + shift[1],
+                        ],
                     });
                 }
             }
-            if seen < 2 {
-                return Err(LocateError::Refine(format!(
-                    "edges not found near the given corners ({seen} of 4 sides seen)"
-                )));
+            if seen == 0 {
+                return fail(
+                    "the strip's long edges are not clearly seen near the given corners".into(),
+                );
             }
-        } else if edges.len() < 12 {
-            return Err(LocateError::Refine(format!(
-                "edges not found near the given corners (saw {} edge points)",
-                edges.len()
-            )));
         }
         h = fit_homography(h, &edges, &[]);
     }
     let out = src.map(|p| h.apply(p));
     check_quad(&out).map_err(|e| LocateError::Refine(e.to_string()))?;
+    // The seen edges must lie on the refined lines; else they were not one clear edge each.
+    let rms = (seen_edges
+        .iter()
+        .map(|o| line_residual(&h, o).powi(2))
+        .sum::<f64>()
+        / seen_edges.len().max(1) as f64)
+        .sqrt();
+    if rms > 0.75 {
+        return fail(format!(
+            "the edges near the given corners are ambiguous (RMS {rms:.2} px off the refined lines)"
+        ));
+    }
     let moved = out
         .iter()
         .zip(&corners)
         .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
         .fold(0.0, f64::max);
-    if moved > 3.0 * search {
-        return Err(LocateError::Refine(format!(
-            "refined corners moved {moved:.1} px, more than the search range allows"
-        )));
+    // (A strip's ends are also moved inward by the search range on purpose.)
+    let trim = if target.is_none() { search_px } else { 0.0 };
+    let limit = std::f64::consts::SQRT_2 * search_px + 2.0 + trim;
+    if moved > limit {
+        return fail(format!(
+            "refined corners would move {moved:.1} px, more than the corners' ±{search_px} px allow"
+        ));
     }
     Ok(out)
 }

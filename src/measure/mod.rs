@@ -79,7 +79,9 @@ pub struct MeasureOptions {
     pub window_cycles: f64,
     /// Which chart to measure when automatic location finds several (0 = leftmost).
     pub chart_index: Option<usize>,
-    /// Refine the given `roi` corners to the region's edges (corners good to ±`refine_px`).
+    /// Refine the given `roi` corners to the region's edges (corners good to about
+    /// ±[`REFINE_SEARCH_PX`]); when the edges are not clearly seen, the corners are
+    /// used as given, with a warning.
     pub refine_roi: bool,
 }
 
@@ -393,18 +395,26 @@ pub fn measure_decoded(
         _ => {
             let given = resolve_roi(opts, dec.width, dec.height).map_err(err)?;
             if opts.refine_roi {
-                let grey = full_grey(dec);
-                let refined = crate::locate::refine_roi(&grey[0], given, target, REFINE_SEARCH_PX)
-                    .map_err(|e| err(Failure::Region(format!("--refine-roi: {e}"))))?;
-                let moved = given
-                    .iter()
-                    .zip(&refined)
-                    .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-                    .fold(0.0, f64::max);
-                warnings.push(format!(
-                    "region corners refined to the edges (moved up to {moved:.2} px)"
-                ));
-                refined
+                // Only the region and the search band around it are converted.
+                let crop = bbox_crop(&given, dec.width, dec.height, REFINE_SEARCH_PX + 8.0);
+                let grey = planes(dec, crop, &default_tone(dec.bits()).0, Channel::Luma);
+                match crate::locate::refine_roi(&grey[0], given, target, REFINE_SEARCH_PX) {
+                    Ok(refined) => {
+                        let moved = given
+                            .iter()
+                            .zip(&refined)
+                            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                            .fold(0.0, f64::max);
+                        warnings.push(format!(
+                            "region corners refined to the edges (moved up to {moved:.2} px)"
+                        ));
+                        refined
+                    }
+                    Err(e) => {
+                        warnings.push(format!("region corners used as given: {e}"));
+                        given
+                    }
+                }
             } else {
                 given
             }
