@@ -255,8 +255,8 @@ fn clipped_sites_are_counted_per_sample_white_level() {
     let p = dir.path().join("clip.dng");
     write_tiff(&p, tags, &data);
     let f = decode_raw(&p).unwrap();
-    assert_eq!(f.clipped_sites, 4);
-    assert_eq!(f.clipped_fraction, 0.5);
+    assert_eq!(f.clipped_sites(), 4);
+    assert_eq!(f.clipped_fraction(), 0.5);
     // a clipped sample reads ≥ 1, black reads 0, below black reads < 0 (not clamped)
     assert!(f.value(1, 0, 0) >= 1.0);
     assert_eq!(f.value(2, 1, 0), 0.0);

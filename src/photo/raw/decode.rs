@@ -179,6 +179,23 @@ fn facts_of(
     f
 }
 
+/// Bytes of the file's head tried first for its TIFF EXIF: TIFF-based raws keep
+/// their IFDs ahead of the image data.
+const EXIF_HEAD_BYTES: usize = 4 << 20;
+
+/// The TIFF EXIF facts of a raw file's bytes, read from its first
+/// [`EXIF_HEAD_BYTES`] when they suffice (the EXIF reader copies what it is
+/// given, and a raw's image data is tens of MB), else from the whole file.
+fn tiff_exif(buf: &[u8]) -> Option<ExifFacts> {
+    let read = |b: &[u8]| guard::contain(|| try_facts_from_bytes(b)).ok().flatten();
+    if buf.len() > EXIF_HEAD_BYTES
+        && let Some(f) = read(&buf[..EXIF_HEAD_BYTES])
+    {
+        return Some(f);
+    }
+    read(buf)
+}
+
 /// Reads the EXIF facts of a raw file without decoding its image data.
 pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
     let src = match open(path) {
@@ -196,9 +213,7 @@ pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
         let decoder = rawler::get_decoder(&src)?;
         decoder.raw_metadata(&src, &RawDecodeParams::default())
     });
-    let tiff = guard::contain(|| try_facts_from_bytes(src.buf()))
-        .ok()
-        .flatten();
+    let tiff = tiff_exif(src.buf());
     match outcome {
         Ok(Ok(meta)) => Ok(facts_of(Some(&meta), tiff, "", "")),
         // No rawler metadata: fall back on the TIFF EXIF alone.
@@ -217,9 +232,7 @@ pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
     let src = open(path)?;
     // The TIFF EXIF copy is read and freed before the image buffer exists,
     // so the two never add up in the peak memory.
-    let tiff = guard::contain(|| try_facts_from_bytes(src.buf()))
-        .ok()
-        .flatten();
+    let tiff = tiff_exif(src.buf());
     let outcome = guard::contain(|| {
         let decoder = rawler::get_decoder(&src)?;
         let params = RawDecodeParams::default();
