@@ -7,8 +7,9 @@
 //! 2. The issue-6 bar on a 24-megapixel raw: a 6000×4000 RGGB DNG written by
 //!    `simulate` (demo log target, shot noise) into the temp folder, then
 //!    `decode_raw` alone against `measure_raw --channel g` (decode included)
-//!    with `--roi` on the first sweep strip and with `--roi` on the target
-//!    frame's corners (`--target`). The file is deleted at the end. Peak RSS of
+//!    with `--roi` on the first sweep strip, with `--roi` on the target
+//!    frame's corners (`--target`), and with the chart found automatically
+//!    from the target's fiducials. The file is deleted at the end. Peak RSS of
 //!    a whole `measure` run is measured separately with `/usr/bin/time -v`
 //!    (README, "Camera raw and EXIF"), since criterion keeps every case in one
 //!    process.
@@ -164,6 +165,13 @@ fn big(c: &mut Criterion) {
     });
     g.bench_function("measure_g_target_corners", |b| {
         b.iter(|| black_box(measure_raw(&path, "big", Some(&target), &target_opts).unwrap()))
+    });
+    let auto_opts = MeasureOptions {
+        channel: Channel::G,
+        ..MeasureOptions::default()
+    };
+    g.bench_function("measure_g_auto_location", |b| {
+        b.iter(|| black_box(measure_raw(&path, "big", Some(&target), &auto_opts).unwrap()))
     });
     g.finish();
     drop(dir);

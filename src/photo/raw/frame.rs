@@ -7,6 +7,7 @@
 
 use super::super::Plane;
 use crate::photo::exif::ExifFacts;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::str::FromStr;
 
@@ -179,8 +180,9 @@ impl RawChannel {
     }
 }
 
-/// Black levels in raw units, a pattern repeating from the frame's top-left
-/// pixel: `levels[((y % height) * width + x % width) * samples + s]`.
+/// Black levels in raw units: a pattern repeating from the frame's top-left
+/// pixel, `levels[((y % height) * width + x % width) * samples + s]`, plus a
+/// per-column and a per-row offset (DNG BlackLevelDeltaH/V) when the file has them.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BlackLevels {
     /// Repeat width in pixels.
@@ -191,30 +193,70 @@ pub struct BlackLevels {
     pub samples: usize,
     /// Levels in raw units (DN).
     pub levels: Vec<f64>,
+    /// Added to the level of every sample in frame column x (DN): one value per
+    /// frame column, or empty for none (DNG BlackLevelDeltaH).
+    pub delta_h: Vec<f64>,
+    /// Added to the level of every sample in frame row y (DN): one value per
+    /// frame row, or empty for none (DNG BlackLevelDeltaV).
+    pub delta_v: Vec<f64>,
 }
 
 impl BlackLevels {
     /// One level for every site and sample.
     pub fn uniform(level: f64, samples: usize) -> BlackLevels {
+        BlackLevels::repeat(1, 1, samples, vec![level; samples])
+    }
+
+    /// A repeating pattern of levels (`width × height × samples`, row-major) without deltas.
+    pub fn repeat(width: usize, height: usize, samples: usize, levels: Vec<f64>) -> BlackLevels {
         BlackLevels {
-            width: 1,
-            height: 1,
+            width,
+            height,
             samples,
-            levels: vec![level; samples],
+            levels,
+            delta_h: Vec::new(),
+            delta_v: Vec::new(),
         }
     }
 
     /// The black level (DN) of sample `s` at frame pixel (x, y).
     pub fn at(&self, x: usize, y: usize, s: usize) -> f64 {
         self.levels[((y % self.height) * self.width + x % self.width) * self.samples + s]
+            + self.delta_h.get(x).copied().unwrap_or(0.0)
+            + self.delta_v.get(y).copied().unwrap_or(0.0)
     }
 
-    fn is_valid(&self) -> bool {
+    fn is_valid(&self, frame_width: usize, frame_height: usize) -> bool {
         self.width > 0
             && self.height > 0
             && self.samples > 0
             && self.levels.len() == self.width * self.height * self.samples
-            && self.levels.iter().all(|l| l.is_finite())
+            && (self.delta_h.is_empty() || self.delta_h.len() == frame_width)
+            && (self.delta_v.is_empty() || self.delta_v.len() == frame_height)
+            && self
+                .levels
+                .iter()
+                .chain(&self.delta_h)
+                .chain(&self.delta_v)
+                .all(|l| l.is_finite())
+    }
+
+    /// The largest black level over the frame, per sample (DN).
+    fn max_per_sample(&self) -> Vec<f64> {
+        let dh = self.delta_h.iter().copied().fold(0.0, f64::max);
+        let dv = self.delta_v.iter().copied().fold(0.0, f64::max);
+        (0..self.samples)
+            .map(|s| {
+                self.levels
+                    .iter()
+                    .skip(s)
+                    .step_by(self.samples)
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max)
+                    + dh
+                    + dv
+            })
+            .collect()
     }
 }
 
@@ -342,17 +384,22 @@ impl RawFrame {
                 spp
             ));
         }
-        if !black.is_valid() || black.samples != spp {
-            return Err(format!("inconsistent black levels {black:?}"));
+        if !black.is_valid(w, h) || black.samples != spp {
+            return Err(format!(
+                "inconsistent black levels ({}×{} repeat of {} levels, {} column and {} row deltas for a {w}×{h} frame)",
+                black.width,
+                black.height,
+                black.levels.len(),
+                black.delta_h.len(),
+                black.delta_v.len()
+            ));
         }
         if white.len() != spp {
             return Err(format!("{} white levels for {spp} samples", white.len()));
         }
-        for (s, &w) in white.iter().enumerate() {
-            for &b in black.levels.iter().skip(s).step_by(spp) {
-                if w.partial_cmp(&b) != Some(std::cmp::Ordering::Greater) {
-                    return Err(format!("white level {w} is not above black level {b}"));
-                }
+        for (&w, b) in white.iter().zip(black.max_per_sample()) {
+            if w.partial_cmp(&b) != Some(std::cmp::Ordering::Greater) {
+                return Err(format!("white level {w} is not above black level {b}"));
             }
         }
         if let Some(c) = &cfa {
@@ -488,7 +535,7 @@ impl RawFrame {
         &self,
         channel: RawChannel,
         rect: (usize, usize, usize, usize),
-        span: &dyn Fn(usize) -> (usize, usize),
+        span: &(dyn Fn(usize) -> (usize, usize) + Sync),
     ) -> Vec<(&'static str, Vec<Plane>)> {
         let name = |c: CfaColour| match c {
             CfaColour::Red => "r",
@@ -564,7 +611,7 @@ impl RawFrame {
         step: (usize, usize),
         s: usize,
         rect: (usize, usize, usize, usize),
-        span: &dyn Fn(usize) -> (usize, usize),
+        span: &(dyn Fn(usize) -> (usize, usize) + Sync),
     ) -> Plane {
         // First lattice index at or after `lo`, and the count of sites in [lo, hi).
         let range = |off: usize, st: usize, lo: usize, hi: usize| {
@@ -582,22 +629,23 @@ impl RawFrame {
         let spp = self.samples_per_pixel;
         let mut data = vec![0f32; pw * ph];
         // Constant black along the plane when the black repeat divides the lattice step.
-        let constant =
-            step.0.is_multiple_of(self.black.width) && step.1.is_multiple_of(self.black.height);
-        for j in 0..ph {
+        let constant = step.0.is_multiple_of(self.black.width)
+            && step.1.is_multiple_of(self.black.height)
+            && self.black.delta_h.is_empty();
+        let fill_row = |j: usize, out: &mut [f32]| {
             let y = y0 + j * step.1;
             let (a, b) = span(y);
             let (a, b) = (a.max(x0), b.min(rect.2));
             if a >= b {
-                continue;
+                return;
             }
             // Lattice columns i with x = x0 + i·step in [a, b).
             let i0 = (a - x0).div_ceil(step.0);
             let i1 = ((b - x0).div_ceil(step.0)).min(pw);
             if i0 >= i1 {
-                continue;
+                return;
             }
-            let out = &mut data[j * pw + i0..j * pw + i1];
+            let out = &mut out[i0..i1];
             let row = self.row_range(y);
             let first = (x0 + i0 * step.0) * spp + s;
             let stride = step.0 * spp;
@@ -628,6 +676,11 @@ impl RawFrame {
                     *o = self.value(x0 + (i0 + k) * step.0, y, s);
                 }
             }
+        };
+        if pw > 0 {
+            data.par_chunks_mut(pw)
+                .enumerate()
+                .for_each(|(j, out)| fill_row(j, out));
         }
         Plane {
             width: pw,
@@ -665,12 +718,7 @@ mod tests {
     fn mosaic() -> RawFrame {
         let (w, h) = (7, 5);
         let data: Vec<u16> = (0..w * h).map(|i| 100 + i as u16 * 10).collect();
-        let black = BlackLevels {
-            width: 2,
-            height: 2,
-            samples: 1,
-            levels: vec![100.0, 90.0, 80.0, 70.0],
-        };
+        let black = BlackLevels::repeat(2, 2, 1, vec![100.0, 90.0, 80.0, 70.0]);
         RawFrame::from_mosaic_u16(w, h, CfaPattern::Rggb, black, 440.0, data).unwrap()
     }
 
