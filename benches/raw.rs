@@ -9,7 +9,10 @@
 //!    `decode_raw` alone against `measure_raw --channel g` (decode included)
 //!    with `--roi` on the first sweep strip, with `--roi` on the target
 //!    frame's corners (`--target`), and with the chart found automatically
-//!    from the target's fiducials. The file is deleted at the end. Peak RSS of
+//!    from the target's fiducials; then the same for the mosaic stored as
+//!    lossless-JPEG tiles (DNG compression 7, as most cameras' raws are
+//!    compressed). The files are deleted at the end unless
+//!    `SWEEPMTF_BENCH_DNG_DIR` names a folder to keep them in. Peak RSS of
 //!    a whole `measure` run is measured separately with `/usr/bin/time -v`
 //!    (README, "Camera raw and EXIF"), since criterion keeps every case in one
 //!    process.
@@ -25,6 +28,7 @@ use sweepmtf::model::System;
 use sweepmtf::photo::exif::read_facts;
 use sweepmtf::photo::linearise::Channel;
 use sweepmtf::photo::raw::{RawChannel, decode_raw};
+use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
 use sweepmtf::simulate::{self, BayerOrder, Camera};
 use sweepmtf::target::SweepLaw;
 
@@ -97,15 +101,18 @@ fn small(c: &mut Criterion) {
     });
 }
 
-/// Writes the 24 MP simulated DNG; returns its path, the first sweep's strip and the target corners.
-fn big_dng(
-    dir: &Path,
-) -> (
-    PathBuf,
-    [[f64; 2]; 4],
-    [[f64; 2]; 4],
-    sweepmtf::target::Target,
-) {
+/// The 24 MP files: an uncompressed DNG (as `simulate -o X.dng` writes it)
+/// and the same mosaic in lossless-JPEG tiles, with the strip, the target
+/// corners and the target.
+struct Big {
+    plain: PathBuf,
+    ljpeg: PathBuf,
+    strip: [[f64; 2]; 4],
+    corners: [[f64; 2]; 4],
+    target: sweepmtf::target::Target,
+}
+
+fn big_dngs(dir: &Path) -> Big {
     let target = simulate::demo::demo_target(SweepLaw::Log);
     let camera = Camera {
         bayer: Some(BayerOrder::Rggb),
@@ -115,66 +122,103 @@ fn big_dng(
     };
     let t = Instant::now();
     let shot = simulate::render(&target, &System::default(), &camera).unwrap();
-    let path = dir.join("big24.dng");
-    simulate::write_shot(&shot, &path).unwrap();
+    let plain = dir.join("big24.dng");
+    simulate::write_shot(&shot, &plain).unwrap();
+    let ljpeg = dir.join("big24_ljpeg.dng");
+    let settings = DngSettings {
+        lossless_jpeg: true,
+        ..DngSettings::default()
+    };
+    let bytes = encode_mosaic(&shot.linear, 6000, 4000, BayerOrder::Rggb, 4.3, &settings).unwrap();
+    std::fs::write(&ljpeg, bytes).unwrap();
+    let size = |p: &Path| std::fs::metadata(p).unwrap().len() as f64 / 1e6;
     eprintln!(
-        "24 MP DNG rendered and written in {:.1} s ({} MB)",
+        "24 MP DNGs rendered and written in {:.1} s (uncompressed {:.1} MB, lossless JPEG {:.1} MB)",
         t.elapsed().as_secs_f64(),
-        std::fs::metadata(&path).unwrap().len() / 1_000_000
+        size(&plain),
+        size(&ljpeg)
     );
     let quad = |q: [f64; 8]| [[q[0], q[1]], [q[2], q[3]], [q[4], q[5]], [q[6], q[7]]];
-    (
-        path,
-        quad(shot.roi().unwrap()),
-        quad(shot.target_corners),
+    Big {
+        plain,
+        ljpeg,
+        strip: quad(shot.roi().unwrap()),
+        corners: quad(shot.target_corners),
         target,
-    )
+    }
 }
 
 fn big(c: &mut Criterion) {
-    let dir = tempfile::Builder::new()
+    // SWEEPMTF_BENCH_DNG_DIR=folder keeps the files there (for `/usr/bin/time -v` runs).
+    let keep = std::env::var_os("SWEEPMTF_BENCH_DNG_DIR").map(PathBuf::from);
+    let tmp = tempfile::Builder::new()
         .prefix("sweepmtf-bench-raw")
         .tempdir_in(std::env::temp_dir())
         .unwrap();
-    let (path, strip, corners, target) = big_dng(dir.path());
+    let dir = keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
+    let big = big_dngs(&dir);
     let strip_opts = MeasureOptions {
-        roi: Some(strip),
+        roi: Some(big.strip),
         channel: Channel::G,
         ..MeasureOptions::default()
     };
     let target_opts = MeasureOptions {
-        roi: Some(corners),
+        roi: Some(big.corners),
         channel: Channel::G,
         ..MeasureOptions::default()
     };
-    let frame = decode_raw(&path).unwrap();
+    let auto_opts = MeasureOptions {
+        channel: Channel::G,
+        ..MeasureOptions::default()
+    };
+    let frame = decode_raw(&big.plain).unwrap();
     eprintln!(
-        "24 MP frame {}×{}, decoded buffer {:.1} MB",
+        "24 MP frame {}×{}, decoded buffer {:.1} MB; strip {:?}; target corners {:?}",
         frame.width,
         frame.height,
-        frame.decoded_bytes() as f64 / 1e6
+        frame.decoded_bytes() as f64 / 1e6,
+        big.strip,
+        big.corners
     );
     drop(frame);
     let mut g = c.benchmark_group("24mp_dng");
     g.sample_size(10);
     g.bench_function("decode_only", |b| {
-        b.iter(|| black_box(decode_raw(black_box(&path)).unwrap()))
+        b.iter(|| black_box(decode_raw(black_box(&big.plain)).unwrap()))
     });
     g.bench_function("measure_g_strip_roi", |b| {
-        b.iter(|| black_box(measure_raw(&path, "big", None, &strip_opts).unwrap()))
+        b.iter(|| black_box(measure_raw(&big.plain, "big", None, &strip_opts).unwrap()))
     });
     g.bench_function("measure_g_target_corners", |b| {
-        b.iter(|| black_box(measure_raw(&path, "big", Some(&target), &target_opts).unwrap()))
+        b.iter(|| {
+            black_box(measure_raw(&big.plain, "big", Some(&big.target), &target_opts).unwrap())
+        })
     });
-    let auto_opts = MeasureOptions {
-        channel: Channel::G,
-        ..MeasureOptions::default()
-    };
     g.bench_function("measure_g_auto_location", |b| {
-        b.iter(|| black_box(measure_raw(&path, "big", Some(&target), &auto_opts).unwrap()))
+        b.iter(|| black_box(measure_raw(&big.plain, "big", Some(&big.target), &auto_opts).unwrap()))
     });
     g.finish();
-    drop(dir);
+    let mut g = c.benchmark_group("24mp_dng_ljpeg");
+    g.sample_size(10);
+    g.bench_function("decode_only", |b| {
+        b.iter(|| black_box(decode_raw(black_box(&big.ljpeg)).unwrap()))
+    });
+    g.bench_function("measure_g_strip_roi", |b| {
+        b.iter(|| black_box(measure_raw(&big.ljpeg, "big", None, &strip_opts).unwrap()))
+    });
+    g.bench_function("measure_g_target_corners", |b| {
+        b.iter(|| {
+            black_box(measure_raw(&big.ljpeg, "big", Some(&big.target), &target_opts).unwrap())
+        })
+    });
+    g.bench_function("measure_g_auto_location", |b| {
+        b.iter(|| black_box(measure_raw(&big.ljpeg, "big", Some(&big.target), &auto_opts).unwrap()))
+    });
+    g.finish();
+    if keep.is_some() {
+        eprintln!("kept {} and {}", big.plain.display(), big.ljpeg.display());
+    }
+    drop(tmp);
 }
 
 criterion_group! {

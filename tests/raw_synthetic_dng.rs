@@ -261,3 +261,35 @@ fn deltas_of_the_wrong_length_are_ignored_with_a_warning() {
         f.facts.warnings
     );
 }
+
+#[test]
+fn lossless_jpeg_tiles_decode_to_the_same_samples_as_the_uncompressed_strip() {
+    use sweepmtf::simulate::BayerOrder;
+    use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
+    // Not a multiple of the 256-px tile, odd margin: padded edge tiles, shifted CFA phase.
+    let (w, h) = (300usize, 270usize);
+    let lin = ramp(w, h);
+    let dir = tempfile::tempdir().unwrap();
+    let mut frames = Vec::new();
+    for lossless_jpeg in [false, true] {
+        let settings = DngSettings {
+            margin_px: 3,
+            lossless_jpeg,
+            ..DngSettings::default()
+        };
+        let bytes = encode_mosaic(&lin, w, h, BayerOrder::Bggr, 4.3, &settings).unwrap();
+        let p = dir.path().join(format!("ljpeg_{lossless_jpeg}.dng"));
+        std::fs::write(&p, &bytes).unwrap();
+        frames.push((bytes.len(), decode_raw(&p).unwrap()));
+    }
+    // (This ramp is noise-like: its tiles do not get smaller than the strip.)
+    let ((_, plain), (_, packed)) = (&frames[0], &frames[1]);
+    assert_eq!((packed.width, packed.height), (w, h));
+    assert_eq!(packed.cfa, CfaPattern::parse("BGGR"));
+    for y in 0..h {
+        for x in 0..w {
+            assert_eq!(packed.dn(x, y, 0), plain.dn(x, y, 0), "({x},{y})");
+            assert!((packed.value(x, y, 0) - lin[y * w + x]).abs() < 1e-4);
+        }
+    }
+}

@@ -9,6 +9,7 @@
 //! one EXIF sub-IFD, so tests can build odd DNGs with the same code.
 
 use super::{BayerOrder, Camera, SimError};
+use rayon::prelude::*;
 
 /// The value of one TIFF tag.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,13 +98,28 @@ fn layout_ifd(tags: &[(u16, TagValue)], at: usize) -> Vec<u8> {
 /// 34665 are added here), the EXIF IFD with `exif`, then `strip` as IFD 0's
 /// only strip.
 pub fn tiff_bytes(tags: &[(u16, TagValue)], exif: &[(u16, TagValue)], strip: &[u8]) -> Vec<u8> {
+    tiff_with_chunks(tags, exif, &[strip], (273, 279))
+}
+
+/// Like [`tiff_bytes`] with several data chunks (strips or tiles) whose
+/// offsets and byte counts go into the tags `(offsets, counts)`: (273, 279)
+/// for strips, (324, 325) for tiles.
+pub fn tiff_with_chunks(
+    tags: &[(u16, TagValue)],
+    exif: &[(u16, TagValue)],
+    chunks: &[&[u8]],
+    (offsets_tag, counts_tag): (u16, u16),
+) -> Vec<u8> {
     let mut ifd0: Vec<(u16, TagValue)> = tags
         .iter()
-        .filter(|(t, _)| !matches!(t, 273 | 279 | 34665))
+        .filter(|(t, _)| !matches!(*t, 273 | 279 | 324 | 325 | 34665))
         .cloned()
         .collect();
-    ifd0.push((273, TagValue::Long(vec![0])));
-    ifd0.push((279, TagValue::Long(vec![strip.len() as u32])));
+    ifd0.push((offsets_tag, TagValue::Long(vec![0; chunks.len()])));
+    ifd0.push((
+        counts_tag,
+        TagValue::Long(chunks.iter().map(|c| c.len() as u32).collect()),
+    ));
     if !exif.is_empty() {
         ifd0.push((34665, TagValue::Long(vec![0])));
     }
@@ -119,23 +135,34 @@ pub fn tiff_bytes(tags: &[(u16, TagValue)], exif: &[(u16, TagValue)], strip: &[u
     } else {
         layout_ifd(&exif, exif_at).len()
     };
-    let strip_at = exif_at + exif_len;
+    let data_at = exif_at + exif_len;
+    let mut offsets = Vec::with_capacity(chunks.len());
+    let mut at = data_at;
+    for c in chunks {
+        offsets.push(at as u32);
+        at += c.len() + (c.len() & 1);
+    }
     for (tag, v) in ifd0.iter_mut() {
-        match tag {
-            273 => *v = TagValue::Long(vec![strip_at as u32]),
-            34665 => *v = TagValue::Long(vec![exif_at as u32]),
-            _ => {}
+        if *tag == offsets_tag {
+            *v = TagValue::Long(offsets.clone());
+        } else if *tag == 34665 {
+            *v = TagValue::Long(vec![exif_at as u32]);
         }
     }
-    let mut file = Vec::with_capacity(strip_at + strip.len());
+    let mut file = Vec::with_capacity(at);
     file.extend(b"II*\0");
     file.extend((ifd0_at as u32).to_le_bytes());
     file.extend(layout_ifd(&ifd0, ifd0_at));
     if !exif.is_empty() {
         file.extend(layout_ifd(&exif, exif_at));
     }
-    debug_assert_eq!(file.len(), strip_at);
-    file.extend_from_slice(strip);
+    debug_assert_eq!(file.len(), data_at);
+    for c in chunks {
+        file.extend_from_slice(c);
+        if c.len() & 1 == 1 {
+            file.push(0);
+        }
+    }
     file
 }
 
@@ -154,6 +181,9 @@ pub struct DngSettings {
     pub black_delta_h: Vec<f64>,
     /// BlackLevelDeltaV: per active-area row, added to the black level (DN); empty = none.
     pub black_delta_v: Vec<f64>,
+    /// Store the mosaic as 256×256 lossless-JPEG tiles (DNG compression 7)
+    /// instead of one uncompressed strip.
+    pub lossless_jpeg: bool,
     /// Make (TIFF tag 271).
     pub make: String,
     /// Model (TIFF tag 272); UniqueCameraModel is "make model".
@@ -169,6 +199,7 @@ impl Default for DngSettings {
             orientation: 1,
             black_delta_h: Vec::new(),
             black_delta_v: Vec::new(),
+            lossless_jpeg: false,
             make: "sweepmtf".to_string(),
             model: "simulated".to_string(),
         }
@@ -221,11 +252,11 @@ pub fn encode_mosaic(
         s.black_delta_h.get(x).copied().unwrap_or(0.0)
             + s.black_delta_v.get(y).copied().unwrap_or(0.0)
     };
-    // Active-area pixel (x, y): black of its site plus the deltas; masked pixels hold the black.
-    let mut strip = vec![0u8; fw * fh * 2];
-    for (fy, row) in strip.chunks_exact_mut(fw * 2).enumerate() {
-        for (fx, out) in row.chunks_exact_mut(2).enumerate() {
-            // Masked pixels: the black pattern continued (anchored at the active area).
+    // Active-area pixel (x, y): black of its site plus the deltas; masked pixels
+    // hold the black pattern continued (anchored at the active area's corner).
+    let mut dns = vec![0u16; fw * fh];
+    for (fy, row) in dns.chunks_exact_mut(fw).enumerate() {
+        for (fx, out) in row.iter_mut().enumerate() {
             let (ax, ay) = (fx.wrapping_sub(m), fy.wrapping_sub(m));
             let inside = ax < width && ay < height;
             let site = ((fy + 2 - m % 2) % 2) * 2 + (fx + 2 - m % 2) % 2;
@@ -237,7 +268,7 @@ pub fn encode_mosaic(
             } else {
                 black
             };
-            out.copy_from_slice(&(dn.round().clamp(0.0, 65535.0) as u16).to_le_bytes());
+            *out = dn.round().clamp(0.0, 65535.0) as u16;
         }
     }
     let pattern: Vec<u8> = [(0, 0), (1, 0), (0, 1), (1, 1)]
@@ -245,7 +276,7 @@ pub fn encode_mosaic(
         .map(|&(x, y)| order.colour_at(x, y) as u8)
         .collect();
     let unique = format!("{} {}", s.make, s.model);
-    let mut tags = vec![
+    let mut tags: Vec<(u16, TagValue)> = vec![
         (254, TagValue::Long(vec![0])),
         (256, TagValue::Long(vec![fw as u32])),
         (257, TagValue::Long(vec![fh as u32])),
@@ -256,7 +287,6 @@ pub fn encode_mosaic(
         (272, TagValue::Ascii(s.model.clone())),
         (274, TagValue::Short(vec![s.orientation])),
         (277, TagValue::Short(vec![1])),
-        (278, TagValue::Long(vec![fh as u32])),
         (284, TagValue::Short(vec![1])),
         (305, TagValue::Ascii("sweepmtf simulate".into())),
         (33421, TagValue::Short(vec![2, 2])),
@@ -300,7 +330,33 @@ pub fn encode_mosaic(
         exif.push((41487, TagValue::Rational(vec![(10_000_000, nm)])));
         exif.push((41488, TagValue::Short(vec![3])));
     }
-    Ok(tiff_bytes(&tags, &exif, &strip))
+    if !s.lossless_jpeg {
+        tags.push((278, TagValue::Long(vec![fh as u32])));
+        let strip: Vec<u8> = dns.iter().flat_map(|d| d.to_le_bytes()).collect();
+        return Ok(tiff_bytes(&tags, &exif, &strip));
+    }
+    // Tiles of TILE × TILE samples, the right and bottom ones padded by repeating the edge.
+    const TILE: usize = 256;
+    tags.retain(|(t, _)| *t != 259);
+    tags.push((259, TagValue::Short(vec![7])));
+    tags.push((322, TagValue::Long(vec![TILE as u32])));
+    tags.push((323, TagValue::Long(vec![TILE as u32])));
+    let (tx, ty) = (fw.div_ceil(TILE), fh.div_ceil(TILE));
+    let tiles: Result<Vec<Vec<u8>>, String> = (0..tx * ty)
+        .into_par_iter()
+        .map(|k| {
+            let (x0, y0) = ((k % tx) * TILE, (k / tx) * TILE);
+            let mut tile = Vec::with_capacity(TILE * TILE);
+            for y in 0..TILE {
+                let row = &dns[(y0 + y).min(fh - 1) * fw..][..fw];
+                tile.extend((0..TILE).map(|x| row[(x0 + x).min(fw - 1)]));
+            }
+            crate::photo::raw::lossless_jpeg_cfa_tile(&tile, TILE, TILE)
+        })
+        .collect();
+    let tiles = tiles.map_err(|e| SimError::Encode(format!("DNG lossless JPEG: {e}")))?;
+    let chunks: Vec<&[u8]> = tiles.iter().map(Vec::as_slice).collect();
+    Ok(tiff_with_chunks(&tags, &exif, &chunks, (324, 325)))
 }
 
 /// Encodes the camera's recorded mosaic as a DNG with the default [`DngSettings`].

@@ -1,4 +1,5 @@
-//! The adapter over `rawler` (=0.8.0, the only place the crate is named):
+//! The adapter over `rawler` (=0.8.0; the crate is named only here and in
+//! the lossless-JPEG tile encoder `ljpeg.rs`):
 //! decode a raw file into a [`RawFrame`] and read a raw's EXIF facts. Every
 //! call into rawler runs inside [`guard::contain`], so a decoder panic on a
 //! corrupt file becomes a [`RawError::DecoderPanic`] for that file.
