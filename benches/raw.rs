@@ -10,7 +10,7 @@
 //!    with `--roi` on the first sweep strip, with `--roi` on the target
 //!    frame's corners (`--target`), and with the chart found automatically
 //!    from the target's fiducials; then the same for the mosaic stored as
-//!    lossless-JPEG tiles (DNG compression 7, as most cameras' raws are
+//!    lossless-JPEG strips (DNG compression 7, as most cameras' raws are
 //!    compressed). The files are deleted at the end unless
 //!    `SWEEPMTF_BENCH_DNG_DIR` names a folder to keep them in. Peak RSS of
 //!    a whole `measure` run is measured separately with `/usr/bin/time -v`
@@ -102,7 +102,7 @@ fn small(c: &mut Criterion) {
 }
 
 /// The 24 MP files: an uncompressed DNG (as `simulate -o X.dng` writes it)
-/// and the same mosaic in lossless-JPEG tiles, with the strip, the target
+/// and the same mosaic in lossless-JPEG strips, with the strip, the target
 /// corners and the target.
 struct Big {
     plain: PathBuf,

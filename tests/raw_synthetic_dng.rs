@@ -263,10 +263,10 @@ fn deltas_of_the_wrong_length_are_ignored_with_a_warning() {
 }
 
 #[test]
-fn lossless_jpeg_tiles_decode_to_the_same_samples_as_the_uncompressed_strip() {
+fn lossless_jpeg_strips_decode_to_the_same_samples_as_the_uncompressed_strip() {
     use sweepmtf::simulate::BayerOrder;
     use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
-    // Not a multiple of the 256-px tile, odd margin: padded edge tiles, shifted CFA phase.
+    // 276 rows: the last 16-row strip is short; odd margin: shifted CFA phase.
     let (w, h) = (300usize, 270usize);
     let lin = ramp(w, h);
     let dir = tempfile::tempdir().unwrap();
@@ -282,7 +282,7 @@ fn lossless_jpeg_tiles_decode_to_the_same_samples_as_the_uncompressed_strip() {
         std::fs::write(&p, &bytes).unwrap();
         frames.push((bytes.len(), decode_raw(&p).unwrap()));
     }
-    // (This ramp is noise-like: its tiles do not get smaller than the strip.)
+    // (This ramp is noise-like: compressed, it does not get smaller.)
     let ((_, plain), (_, packed)) = (&frames[0], &frames[1]);
     assert_eq!((packed.width, packed.height), (w, h));
     assert_eq!(packed.cfa, CfaPattern::parse("BGGR"));

@@ -1,5 +1,6 @@
 //! A minimal DNG writer for simulated Bayer shots: one little-endian TIFF
-//! file, the uncompressed 16-bit CFA mosaic in IFD 0 (one strip), with the
+//! file, the 16-bit CFA mosaic in IFD 0 (one uncompressed strip, or
+//! lossless-JPEG strips of 16 rows as most cameras compress), with the
 //! DNG tags a raw decoder needs (CFA pattern, per-site black levels, white
 //! level, active area with masked borders, optional BlackLevelDeltaH/V and
 //! orientation) and an EXIF IFD carrying the pixel pitch as
@@ -181,8 +182,8 @@ pub struct DngSettings {
     pub black_delta_h: Vec<f64>,
     /// BlackLevelDeltaV: per active-area row, added to the black level (DN); empty = none.
     pub black_delta_v: Vec<f64>,
-    /// Store the mosaic as 256×256 lossless-JPEG tiles (DNG compression 7)
-    /// instead of one uncompressed strip.
+    /// Store the mosaic as lossless-JPEG strips of 16 rows (DNG compression 7)
+    /// instead of one uncompressed strip; needs an even sensor width.
     pub lossless_jpeg: bool,
     /// Make (TIFF tag 271).
     pub make: String,
@@ -335,28 +336,20 @@ pub fn encode_mosaic(
         let strip: Vec<u8> = dns.iter().flat_map(|d| d.to_le_bytes()).collect();
         return Ok(tiff_bytes(&tags, &exif, &strip));
     }
-    // Tiles of TILE × TILE samples, the right and bottom ones padded by repeating the edge.
-    const TILE: usize = 256;
+    // Strips of ROWS rows, each one lossless JPEG (two interleaved components
+    // of half the width, as DNG writers do). Strips, not padded tiles: rawler
+    // crops a padded image by copying it, which would double its peak memory.
+    const ROWS: usize = 16;
     tags.retain(|(t, _)| *t != 259);
     tags.push((259, TagValue::Short(vec![7])));
-    tags.push((322, TagValue::Long(vec![TILE as u32])));
-    tags.push((323, TagValue::Long(vec![TILE as u32])));
-    let (tx, ty) = (fw.div_ceil(TILE), fh.div_ceil(TILE));
-    let tiles: Result<Vec<Vec<u8>>, String> = (0..tx * ty)
-        .into_par_iter()
-        .map(|k| {
-            let (x0, y0) = ((k % tx) * TILE, (k / tx) * TILE);
-            let mut tile = Vec::with_capacity(TILE * TILE);
-            for y in 0..TILE {
-                let row = &dns[(y0 + y).min(fh - 1) * fw..][..fw];
-                tile.extend((0..TILE).map(|x| row[(x0 + x).min(fw - 1)]));
-            }
-            crate::photo::raw::lossless_jpeg_cfa_tile(&tile, TILE, TILE)
-        })
+    tags.push((278, TagValue::Long(vec![ROWS as u32])));
+    let strips: Result<Vec<Vec<u8>>, String> = dns
+        .par_chunks(ROWS * fw)
+        .map(|rows| crate::photo::raw::lossless_jpeg_cfa_tile(rows, fw, rows.len() / fw))
         .collect();
-    let tiles = tiles.map_err(|e| SimError::Encode(format!("DNG lossless JPEG: {e}")))?;
-    let chunks: Vec<&[u8]> = tiles.iter().map(Vec::as_slice).collect();
-    Ok(tiff_with_chunks(&tags, &exif, &chunks, (324, 325)))
+    let strips = strips.map_err(|e| SimError::Encode(format!("DNG lossless JPEG: {e}")))?;
+    let chunks: Vec<&[u8]> = strips.iter().map(Vec::as_slice).collect();
+    Ok(tiff_with_chunks(&tags, &exif, &chunks, (273, 279)))
 }
 
 /// Encodes the camera's recorded mosaic as a DNG with the default [`DngSettings`].

@@ -1,4 +1,4 @@
-//! Lossless JPEG (ITU T.81 process 14) encoding of one DNG tile of a CFA
+//! Lossless JPEG (ITU T.81 process 14) encoding of one DNG strip or tile of a CFA
 //! mosaic, through rawler's encoder (kept here so that only `photo::raw`
 //! names the crate). Used by the simulator to write compressed DNGs.
 
