@@ -1,17 +1,36 @@
-//! Raw decode speed and memory on the real Canon 550D DNG (1888×1182, 14-bit
-//! uncompressed): `decode_raw` alone, decode + the green planes a `--channel g`
-//! measurement bins, and the EXIF facts alone. Prints the first (cold) decode
-//! time, which includes rawler's one-off camera-table load, and the process's
-//! peak RSS against the decoded CFA frame's size.
+//! Raw decode and measure speed and memory.
 //!
-//! Run: `cargo bench --bench raw`
+//! 1. The real Canon 550D DNG (1888×1182, 14-bit uncompressed): `decode_raw`
+//!    alone, decode + the green planes, and the EXIF facts alone. Prints the
+//!    first (cold) decode time, which includes rawler's one-off camera-table
+//!    load, and the process's peak RSS against the decoded CFA frame's size.
+//! 2. The issue-6 bar on a 24-megapixel raw: a 6000×4000 RGGB DNG written by
+//!    `simulate` (demo log target, shot noise) into the temp folder, then
+//!    `decode_raw` alone against `measure_raw --channel g` (decode included)
+//!    with `--roi` on the first sweep strip, with `--roi` on the target
+//!    frame's corners (`--target`), and with the chart found automatically
+//!    from the target's fiducials; then the same for the mosaic stored as
+//!    lossless-JPEG strips (DNG compression 7, as most cameras' raws are
+//!    compressed). The files are deleted at the end unless
+//!    `SWEEPMTF_BENCH_DNG_DIR` names a folder to keep them in. Peak RSS of
+//!    a whole `measure` run is measured separately with `/usr/bin/time -v`
+//!    (README, "Camera raw and EXIF"), since criterion keeps every case in one
+//!    process.
+//!
+//! Run: `cargo bench --bench raw` (`-- 24mp` for the big file only).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use sweepmtf::measure::{MeasureOptions, measure_raw};
+use sweepmtf::model::System;
 use sweepmtf::photo::exif::read_facts;
+use sweepmtf::photo::linearise::Channel;
 use sweepmtf::photo::raw::{RawChannel, decode_raw};
+use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
+use sweepmtf::simulate::{self, BayerOrder, Camera};
+use sweepmtf::target::SweepLaw;
 
 fn dng() -> PathBuf {
     let beside = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/realdata"));
@@ -33,7 +52,7 @@ fn peak_rss_kib() -> Option<u64> {
     status_kib("VmHWM:")
 }
 
-fn bench(c: &mut Criterion) {
+fn small(c: &mut Criterion) {
     let path = dng();
     let rss0 = peak_rss_kib();
     let t = Instant::now();
@@ -62,10 +81,6 @@ fn bench(c: &mut Criterion) {
         rss3,
         facts.warnings.len()
     );
-    eprintln!(
-        "current RSS with frame and planes held: {:?} KiB",
-        status_kib("VmRSS:")
-    );
     drop((frame, planes));
 
     c.bench_function("decode_raw dng", |b| {
@@ -86,5 +101,129 @@ fn bench(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench);
+/// The 24 MP files: an uncompressed DNG (as `simulate -o X.dng` writes it)
+/// and the same mosaic in lossless-JPEG strips, with the strip, the target
+/// corners and the target.
+struct Big {
+    plain: PathBuf,
+    ljpeg: PathBuf,
+    strip: [[f64; 2]; 4],
+    corners: [[f64; 2]; 4],
+    target: sweepmtf::target::Target,
+}
+
+fn big_dngs(dir: &Path) -> Big {
+    let target = simulate::demo::demo_target(SweepLaw::Log);
+    let camera = Camera {
+        bayer: Some(BayerOrder::Rggb),
+        full_well_e: Some(30000.0),
+        read_noise_e: 3.0,
+        ..Camera::noiseless(6000, 4000)
+    };
+    let t = Instant::now();
+    let shot = simulate::render(&target, &System::default(), &camera).unwrap();
+    let plain = dir.join("big24.dng");
+    simulate::write_shot(&shot, &plain).unwrap();
+    let ljpeg = dir.join("big24_ljpeg.dng");
+    let settings = DngSettings {
+        lossless_jpeg: true,
+        ..DngSettings::default()
+    };
+    let bytes = encode_mosaic(&shot.linear, 6000, 4000, BayerOrder::Rggb, 4.3, &settings).unwrap();
+    std::fs::write(&ljpeg, bytes).unwrap();
+    let size = |p: &Path| std::fs::metadata(p).unwrap().len() as f64 / 1e6;
+    eprintln!(
+        "24 MP DNGs rendered and written in {:.1} s (uncompressed {:.1} MB, lossless JPEG {:.1} MB)",
+        t.elapsed().as_secs_f64(),
+        size(&plain),
+        size(&ljpeg)
+    );
+    let quad = |q: [f64; 8]| [[q[0], q[1]], [q[2], q[3]], [q[4], q[5]], [q[6], q[7]]];
+    Big {
+        plain,
+        ljpeg,
+        strip: quad(shot.roi().unwrap()),
+        corners: quad(shot.target_corners),
+        target,
+    }
+}
+
+fn big(c: &mut Criterion) {
+    // SWEEPMTF_BENCH_DNG_DIR=folder keeps the files there (for `/usr/bin/time -v` runs).
+    let keep = std::env::var_os("SWEEPMTF_BENCH_DNG_DIR").map(PathBuf::from);
+    let tmp = tempfile::Builder::new()
+        .prefix("sweepmtf-bench-raw")
+        .tempdir_in(std::env::temp_dir())
+        .unwrap();
+    let dir = keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
+    let big = big_dngs(&dir);
+    let strip_opts = MeasureOptions {
+        roi: Some(big.strip),
+        channel: Channel::G,
+        ..MeasureOptions::default()
+    };
+    let target_opts = MeasureOptions {
+        roi: Some(big.corners),
+        channel: Channel::G,
+        ..MeasureOptions::default()
+    };
+    let auto_opts = MeasureOptions {
+        channel: Channel::G,
+        ..MeasureOptions::default()
+    };
+    let frame = decode_raw(&big.plain).unwrap();
+    eprintln!(
+        "24 MP frame {}×{}, decoded buffer {:.1} MB; strip {:?}; target corners {:?}",
+        frame.width,
+        frame.height,
+        frame.decoded_bytes() as f64 / 1e6,
+        big.strip,
+        big.corners
+    );
+    drop(frame);
+    let mut g = c.benchmark_group("24mp_dng");
+    g.sample_size(10);
+    g.bench_function("decode_only", |b| {
+        b.iter(|| black_box(decode_raw(black_box(&big.plain)).unwrap()))
+    });
+    g.bench_function("measure_g_strip_roi", |b| {
+        b.iter(|| black_box(measure_raw(&big.plain, "big", None, &strip_opts).unwrap()))
+    });
+    g.bench_function("measure_g_target_corners", |b| {
+        b.iter(|| {
+            black_box(measure_raw(&big.plain, "big", Some(&big.target), &target_opts).unwrap())
+        })
+    });
+    g.bench_function("measure_g_auto_location", |b| {
+        b.iter(|| black_box(measure_raw(&big.plain, "big", Some(&big.target), &auto_opts).unwrap()))
+    });
+    g.finish();
+    let mut g = c.benchmark_group("24mp_dng_ljpeg");
+    g.sample_size(10);
+    g.bench_function("decode_only", |b| {
+        b.iter(|| black_box(decode_raw(black_box(&big.ljpeg)).unwrap()))
+    });
+    g.bench_function("measure_g_strip_roi", |b| {
+        b.iter(|| black_box(measure_raw(&big.ljpeg, "big", None, &strip_opts).unwrap()))
+    });
+    g.bench_function("measure_g_target_corners", |b| {
+        b.iter(|| {
+            black_box(measure_raw(&big.ljpeg, "big", Some(&big.target), &target_opts).unwrap())
+        })
+    });
+    g.bench_function("measure_g_auto_location", |b| {
+        b.iter(|| black_box(measure_raw(&big.ljpeg, "big", Some(&big.target), &auto_opts).unwrap()))
+    });
+    g.finish();
+    if keep.is_some() {
+        eprintln!("kept {} and {}", big.plain.display(), big.ljpeg.display());
+    }
+    drop(tmp);
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = small, big
+}
 criterion_main!(benches);

@@ -185,8 +185,8 @@ fn clipped_sites_match_an_independent_count() {
             clipped += (d >= t.white) as usize;
         }
     }
-    assert_eq!(f.clipped_sites, clipped, "max DN {max}");
-    assert_eq!(f.clipped_fraction, clipped as f64 / (1734.0 * 1156.0));
+    assert_eq!(f.clipped_sites(), clipped, "max DN {max}");
+    assert_eq!(f.clipped_fraction(), clipped as f64 / (1734.0 * 1156.0));
 }
 
 #[test]

@@ -1,100 +1,18 @@
-//! DNGs written here by a minimal hand-made TIFF writer, with known samples:
-//! an odd active-area offset, a default crop, a 2×2 per-site black-level
-//! pattern (all anchored at the active area, as DNG says) and a linear
-//! (demosaiced, no CFA) DNG, which must come out as R, G, B planes.
+//! DNGs written here by the library's minimal TIFF/DNG writer
+//! (`simulate::dng`), with known samples: an odd active-area offset, a default
+//! crop, a 2×2 per-site black-level pattern (all anchored at the active area,
+//! as DNG says), BlackLevelDeltaH/V (which rawler does not apply: the adapter
+//! reads them itself), and a linear (demosaiced, no CFA) DNG, which must come
+//! out as R, G, B planes.
 
 use std::path::Path;
 use sweepmtf::photo::raw::{CfaPattern, RawChannel, decode_raw};
+use sweepmtf::simulate::dng::{TagValue as V, tiff_bytes};
 
-enum V {
-    Short(Vec<u16>),
-    Long(Vec<u32>),
-    Byte(Vec<u8>),
-    Ascii(&'static str),
-}
-
-/// Little-endian TIFF with one IFD holding `tags` and one strip of u16 `data`.
-fn write_tiff(path: &Path, mut tags: Vec<(u16, V)>, data: &[u16]) {
+/// A little-endian TIFF with `tags` and one strip of u16 `data`, by the library's DNG writer.
+fn write_tiff(path: &Path, tags: Vec<(u16, V)>, data: &[u16]) {
     let strip: Vec<u8> = data.iter().flat_map(|v| v.to_le_bytes()).collect();
-    tags.push((273, V::Long(vec![0]))); // patched below
-    tags.push((279, V::Long(vec![strip.len() as u32])));
-    tags.sort_by_key(|t| t.0);
-    let n = tags.len();
-    let ifd_at = 8usize;
-    let mut extra_at = ifd_at + 2 + 12 * n + 4;
-    let mut ifd = Vec::new();
-    let mut extra = Vec::new();
-    let strip_at = {
-        // size of out-of-line values first, to place the strip after them
-        let mut size = 0;
-        for (_, v) in &tags {
-            let b = bytes_of(v);
-            if b.len() > 4 {
-                size += b.len() + (b.len() & 1);
-            }
-        }
-        extra_at + size
-    };
-    ifd.extend((n as u16).to_le_bytes());
-    for (tag, v) in &tags {
-        let v = if *tag == 273 {
-            V::Long(vec![strip_at as u32])
-        } else {
-            clone(v)
-        };
-        let (typ, count) = match &v {
-            V::Short(s) => (3u16, s.len()),
-            V::Long(s) => (4, s.len()),
-            V::Byte(s) => (1, s.len()),
-            V::Ascii(s) => (2, s.len() + 1),
-        };
-        let b = bytes_of(&v);
-        ifd.extend(tag.to_le_bytes());
-        ifd.extend(typ.to_le_bytes());
-        ifd.extend((count as u32).to_le_bytes());
-        if b.len() <= 4 {
-            let mut w = b.clone();
-            w.resize(4, 0);
-            ifd.extend(w);
-        } else {
-            ifd.extend((extra_at as u32).to_le_bytes());
-            extra.extend(&b);
-            if b.len() & 1 == 1 {
-                extra.push(0);
-            }
-            extra_at += b.len() + (b.len() & 1);
-        }
-    }
-    ifd.extend(0u32.to_le_bytes());
-    let mut file = b"II*\0".to_vec();
-    file.extend((ifd_at as u32).to_le_bytes());
-    file.extend(ifd);
-    file.extend(extra);
-    assert_eq!(file.len(), strip_at);
-    file.extend(strip);
-    std::fs::write(path, file).unwrap();
-}
-
-fn clone(v: &V) -> V {
-    match v {
-        V::Short(s) => V::Short(s.clone()),
-        V::Long(s) => V::Long(s.clone()),
-        V::Byte(s) => V::Byte(s.clone()),
-        V::Ascii(s) => V::Ascii(s),
-    }
-}
-
-fn bytes_of(v: &V) -> Vec<u8> {
-    match v {
-        V::Short(s) => s.iter().flat_map(|x| x.to_le_bytes()).collect(),
-        V::Long(s) => s.iter().flat_map(|x| x.to_le_bytes()).collect(),
-        V::Byte(s) => s.clone(),
-        V::Ascii(s) => {
-            let mut b = s.as_bytes().to_vec();
-            b.push(0);
-            b
-        }
-    }
+    std::fs::write(path, tiff_bytes(&tags, &[], &strip)).unwrap();
 }
 
 fn common(w: u32, h: u32, spp: u16, photometric: u16) -> Vec<(u16, V)> {
@@ -105,8 +23,8 @@ fn common(w: u32, h: u32, spp: u16, photometric: u16) -> Vec<(u16, V)> {
         (258, V::Short(vec![16; spp as usize])),
         (259, V::Short(vec![1])),
         (262, V::Short(vec![photometric])),
-        (271, V::Ascii("Testmaker")),
-        (272, V::Ascii("Synthetic One")),
+        (271, V::Ascii("Testmaker".into())),
+        (272, V::Ascii("Synthetic One".into())),
         (277, V::Short(vec![spp])),
         (278, V::Long(vec![h])),
         (284, V::Short(vec![1])),
@@ -255,10 +173,123 @@ fn clipped_sites_are_counted_per_sample_white_level() {
     let p = dir.path().join("clip.dng");
     write_tiff(&p, tags, &data);
     let f = decode_raw(&p).unwrap();
-    assert_eq!(f.clipped_sites, 4);
-    assert_eq!(f.clipped_fraction, 0.5);
+    assert_eq!(f.clipped_sites(), 4);
+    assert_eq!(f.clipped_fraction(), 0.5);
     // a clipped sample reads ≥ 1, black reads 0, below black reads < 0 (not clamped)
     assert!(f.value(1, 0, 0) >= 1.0);
     assert_eq!(f.value(2, 1, 0), 0.0);
     assert!(f.value(1, 1, 0) < 0.0);
+}
+
+/// Linear values 0.05–0.95 that change at every pixel, `w × h` row-major.
+fn ramp(w: usize, h: usize) -> Vec<f32> {
+    (0..w * h)
+        .map(|i| 0.05 + 0.9 * ((i * 7919) % 1000) as f32 / 1000.0)
+        .collect()
+}
+
+#[test]
+fn black_level_deltas_per_column_and_row_are_applied() {
+    use sweepmtf::simulate::BayerOrder;
+    use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
+    let (w, h) = (10usize, 6usize);
+    let lin = ramp(w, h);
+    // Deltas of tens to hundreds of DN: ignoring them would err by up to 0.005.
+    let settings = DngSettings {
+        margin_px: 3,
+        black_delta_h: (0..w).map(|x| 25.0 * x as f64 - 60.0).collect(),
+        black_delta_v: (0..h).map(|y| 40.0 * y as f64 + 12.5).collect(),
+        ..DngSettings::default()
+    };
+    let bytes = encode_mosaic(&lin, w, h, BayerOrder::Grbg, 4.3, &settings).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("deltas.dng");
+    std::fs::write(&p, bytes).unwrap();
+    let f = decode_raw(&p).unwrap();
+    assert_eq!((f.width, f.height), (w, h));
+    assert_eq!(f.cfa, CfaPattern::parse("GRBG"));
+    assert_eq!(f.black.delta_h, settings.black_delta_h);
+    assert_eq!(f.black.delta_v, settings.black_delta_v);
+    // Per DNG: black(x, y) = BlackLevel[site] + DeltaH[x] + DeltaV[y]; white − black spans [0, 1].
+    let white = settings.white as f64;
+    for y in 0..h {
+        for x in 0..w {
+            let b = settings.black[(y % 2) * 2 + x % 2] as f64
+                + settings.black_delta_h[x]
+                + settings.black_delta_v[y];
+            assert!((f.black.at(x, y, 0) - b).abs() < 1e-9);
+            let dn = (b + lin[y * w + x] as f64 * (white - b)).round();
+            let want = (dn - b) / (white - b);
+            assert!((f.value(x, y, 0) as f64 - want).abs() < 1e-6, "({x},{y})");
+            assert!(
+                (f.value(x, y, 0) - lin[y * w + x]).abs() < 1e-4,
+                "({x},{y})"
+            );
+        }
+    }
+    // Planes take the deltas too (no constant-black shortcut along a row).
+    for p in f.channel_planes(RawChannel::All) {
+        for j in 0..p.height {
+            for i in 0..p.width {
+                let (cx, cy) = p.centre(i, j);
+                let (x, y) = (cx as usize, cy as usize);
+                assert!((p.get(i, j) - lin[y * w + x]).abs() < 1e-4, "({x},{y})");
+            }
+        }
+    }
+}
+
+#[test]
+fn deltas_of_the_wrong_length_are_ignored_with_a_warning() {
+    let mut tags = common(4, 2, 1, 32803);
+    tags.push((33421, V::Short(vec![2, 2])));
+    tags.push((33422, V::Byte(vec![0, 1, 1, 2])));
+    tags.push((50714, V::Long(vec![64])));
+    tags.push((50715, V::SRational(vec![(5, 1); 3])));
+    tags.push((50717, V::Long(vec![1000])));
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bad_delta.dng");
+    write_tiff(&p, tags, &[100u16; 8]);
+    let f = decode_raw(&p).unwrap();
+    assert!(f.black.delta_h.is_empty());
+    assert!(
+        f.facts
+            .warnings
+            .iter()
+            .any(|w| w.contains("BlackLevelDeltaH") && w.contains("ignored")),
+        "{:?}",
+        f.facts.warnings
+    );
+}
+
+#[test]
+fn lossless_jpeg_strips_decode_to_the_same_samples_as_the_uncompressed_strip() {
+    use sweepmtf::simulate::BayerOrder;
+    use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
+    // 276 rows: the last 16-row strip is short; odd margin: shifted CFA phase.
+    let (w, h) = (300usize, 270usize);
+    let lin = ramp(w, h);
+    let dir = tempfile::tempdir().unwrap();
+    let mut frames = Vec::new();
+    for lossless_jpeg in [false, true] {
+        let settings = DngSettings {
+            margin_px: 3,
+            lossless_jpeg,
+            ..DngSettings::default()
+        };
+        let bytes = encode_mosaic(&lin, w, h, BayerOrder::Bggr, 4.3, &settings).unwrap();
+        let p = dir.path().join(format!("ljpeg_{lossless_jpeg}.dng"));
+        std::fs::write(&p, &bytes).unwrap();
+        frames.push((bytes.len(), decode_raw(&p).unwrap()));
+    }
+    // (This ramp is noise-like: compressed, it does not get smaller.)
+    let ((_, plain), (_, packed)) = (&frames[0], &frames[1]);
+    assert_eq!((packed.width, packed.height), (w, h));
+    assert_eq!(packed.cfa, CfaPattern::parse("BGGR"));
+    for y in 0..h {
+        for x in 0..w {
+            assert_eq!(packed.dn(x, y, 0), plain.dn(x, y, 0), "({x},{y})");
+            assert!((packed.value(x, y, 0) - lin[y * w + x]).abs() < 1e-4);
+        }
+    }
 }

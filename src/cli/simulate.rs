@@ -96,7 +96,8 @@ pub struct Args {
     /// JPEG quality 1–100 (the output name must end in .jpg; default there 90).
     #[arg(long, value_name = "Q")]
     pub jpeg: Option<u8>,
-    /// Write a 16-bit linear Bayer mosaic: RGGB, BGGR, GRBG or GBRG.
+    /// Write a 16-bit linear Bayer mosaic: RGGB, BGGR, GRBG or GBRG (as PNG, TIFF, or a
+    /// camera-raw DNG when the output name ends in .dng).
     #[arg(long, value_name = "ORDER")]
     pub bayer: Option<String>,
     /// Seed of the temporal noise.
@@ -114,8 +115,9 @@ pub struct Args {
     /// The model system: `--system FILE` and/or factor flags (none: a perfect lens).
     #[command(flatten)]
     pub factors: FactorArgs,
-    /// The photo to write: .png, .jpg or .tif; STEM.truth.csv and STEM.json go beside it.
-    #[arg(short = 'o', long = "output", value_name = "STEM.png|.jpg|.tif")]
+    /// The photo to write: .png, .jpg, .tif, or .dng (with --bayer); STEM.truth.csv and
+    /// STEM.json go beside it.
+    #[arg(short = 'o', long = "output", value_name = "STEM.png|.jpg|.tif|.dng")]
     pub output: PathBuf,
 }
 

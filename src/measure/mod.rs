@@ -273,6 +273,10 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
 }
 
 /// Measures a camera raw file: linear CFA planes, no demosaicing, no tone curve.
+///
+/// The region is `--roi` (stored-sensor-frame pixels), or found from the
+/// target's fiducials on a green lattice when only a target is given. Only
+/// the region's rows are converted to f32 (no whole-frame copy).
 pub fn measure_raw(
     path: &Path,
     name: &str,
@@ -286,8 +290,43 @@ pub fn measure_raw(
     };
     check_options(opts).map_err(err)?;
     let frame = decode_raw(path).map_err(|e| err(Failure::Raw(e.to_string())))?;
-    let roi = resolve_roi(opts, frame.width, frame.height).map_err(err)?;
     let mut warnings = Vec::new();
+    let roi = match (opts.roi, target) {
+        // No region but a target: find the chart from its fiducials.
+        (None, Some(t)) => {
+            let plane = frame.location_plane();
+            let loc = crate::locate::find_chart(&plane, t, opts.chart_index)
+                .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
+            warnings.extend(loc.warnings);
+            warnings.push("region found automatically from the target's fiducials".into());
+            loc.corners_px
+        }
+        _ => {
+            let given = resolve_roi(opts, frame.width, frame.height).map_err(err)?;
+            if opts.refine_roi {
+                let plane = frame.location_plane();
+                let refined = crate::locate::refine_roi(&plane, given, target, REFINE_SEARCH_PX)
+                    .map_err(|e| err(Failure::Region(format!("--refine-roi: {e}"))))?;
+                let moved = given
+                    .iter()
+                    .zip(&refined)
+                    .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                    .fold(0.0, f64::max);
+                warnings.push(format!(
+                    "region corners refined to the edges (moved up to {moved:.2} px)"
+                ));
+                refined
+            } else {
+                given
+            }
+        }
+    };
+    if let Some(o) = frame.facts.orientation.filter(|&o| o != 1) {
+        warnings.push(format!(
+            "raw file with EXIF orientation {o}: region and plots are in the stored sensor frame ({}×{} px, not turned)",
+            frame.width, frame.height
+        ));
+    }
     let rc = match opts.channel {
         Channel::Luma => {
             warnings.push(
@@ -305,7 +344,51 @@ pub fn measure_raw(
     if opts.gamma.is_some() || opts.tone_chart {
         warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
     }
-    let groups = frame.channel_groups(rc);
+    // Only what binning reads is converted to f32: the sweep strips (the whole
+    // region when there are sine patches or no target), each row's span ± 2 px.
+    let read: Vec<[Point; 4]> = match (target, strips(&roi, target)) {
+        (Some(t), Ok(specs)) if t.patches.is_empty() && !specs.is_empty() => specs
+            .iter()
+            .map(|(_, strip, _, _)| strip.image_quad(0.0, strip.width))
+            .collect(),
+        _ => vec![roi],
+    };
+    let corners: Vec<Point> = read.iter().flatten().copied().collect();
+    let (xs, ys) = (corners.iter().map(|p| p[0]), corners.iter().map(|p| p[1]));
+    let bbox = [
+        [
+            xs.clone().fold(f64::INFINITY, f64::min),
+            ys.clone().fold(f64::INFINITY, f64::min),
+        ],
+        [
+            xs.fold(f64::NEG_INFINITY, f64::max),
+            ys.fold(f64::NEG_INFINITY, f64::max),
+        ],
+    ];
+    let crop = bbox_crop(
+        &[
+            bbox[0],
+            [bbox[1][0], bbox[0][1]],
+            bbox[1],
+            [bbox[0][0], bbox[1][1]],
+        ],
+        frame.width,
+        frame.height,
+        2.0,
+    );
+    let span = |y: usize| {
+        read.iter()
+            .map(|q| raw_row_span(q, y))
+            .filter(|(a, b)| a < b)
+            .fold((0, 0), |(lo, hi), (a, b)| {
+                if lo >= hi {
+                    (a, b)
+                } else {
+                    (lo.min(a), hi.max(b))
+                }
+            })
+    };
+    let groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
     let pitch =
         crate::photo::pitch::resolve(&frame.facts, frame.width, frame.height, opts.pixel_pitch_mm);
     let o = MeasureOptions {
@@ -321,10 +404,18 @@ pub fn measure_raw(
         0.9999,
     )
     .map_err(err)?;
-    // Preview: the first sample of each pixel, through the sRGB curve for display.
+    drop(groups);
+    // Preview: the first sample of each pixel, through the sRGB curve (a table) for display.
+    const LEVELS: usize = 4096;
+    let srgb: Vec<u8> = (0..LEVELS)
+        .map(|i| {
+            let v = i as f64 / (LEVELS - 1) as f64;
+            (255.0 * crate::photo::linearise::linear_to_srgb(v)).round() as u8
+        })
+        .collect();
     m.preview = preview_from(&roi, frame.width, frame.height, |x, y| {
-        let v = frame.value(x, y, 0).clamp(0.0, 1.0) as f64;
-        let c = (255.0 * crate::photo::linearise::linear_to_srgb(v)).round() as u8;
+        let v = frame.value(x, y, 0).clamp(0.0, 1.0);
+        let c = srgb[(v * (LEVELS - 1) as f32 + 0.5) as usize];
         [c, c, c]
     });
     m.source = name.to_string();
@@ -334,6 +425,25 @@ pub fn measure_raw(
     warnings.append(&mut m.warnings);
     m.warnings = warnings;
     Ok(m)
+}
+
+/// Columns [a, b) of frame row `y` that a measurement of `roi` reads: the
+/// region's span over y ± 2 px, widened by 2 px (3 on the right).
+fn raw_row_span(roi: &[Point; 4], y: usize) -> (usize, usize) {
+    let yc = y as f64 + 0.5;
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for dy in [-2.0, 0.0, 2.0] {
+        if let Some((a, b)) = profile::row_span(roi, yc + dy) {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+    }
+    if lo > hi {
+        (0, 0)
+    } else {
+        ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
+    }
 }
 
 /// Reads the target description named in the options, if any.

@@ -8,6 +8,8 @@
 mod decode;
 mod frame;
 mod guard;
+mod ljpeg;
 
 pub use decode::{RAW_EXTENSIONS, RawError, decode_raw, is_raw_path, read_raw_facts};
 pub use frame::{BlackLevels, CfaColour, CfaPattern, RawChannel, RawFrame};
+pub use ljpeg::lossless_jpeg_cfa_tile;

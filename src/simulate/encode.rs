@@ -1,7 +1,8 @@
 //! Stored code values and file formats: the transfer curve (sRGB, gamma,
 //! linear), quantisation to 8 or 16 bits, and PNG, TIFF or JPEG (at a given
 //! quality, through the `image` crate's encoder) as grey images; a Bayer mosaic
-//! is one 16-bit linear channel (TIFF files also carry the TIFF/EP CFA tags).
+//! is one 16-bit linear channel (TIFF files also carry the TIFF/EP CFA tags),
+//! or a camera-raw DNG ([`super::dng`]).
 
 use super::{BayerOrder, Camera, SimError};
 use image::ImageEncoder;
@@ -19,10 +20,12 @@ pub enum PhotoFormat {
     Jpeg,
     /// TIFF, 8 or 16 bits.
     Tiff,
+    /// DNG camera raw of a Bayer mosaic (16-bit, black and white levels, active area).
+    Dng,
 }
 
 impl PhotoFormat {
-    /// The format named by a file's extension (.png, .jpg/.jpeg, .tif/.tiff).
+    /// The format named by a file's extension (.png, .jpg/.jpeg, .tif/.tiff, .dng).
     pub fn from_path(path: &Path) -> Result<PhotoFormat, SimError> {
         let ext = path
             .extension()
@@ -33,8 +36,9 @@ impl PhotoFormat {
             "png" => Ok(PhotoFormat::Png),
             "jpg" | "jpeg" => Ok(PhotoFormat::Jpeg),
             "tif" | "tiff" => Ok(PhotoFormat::Tiff),
+            "dng" => Ok(PhotoFormat::Dng),
             _ => Err(SimError::Parameter(format!(
-                "{}: the photo's name must end in .png, .jpg or .tif",
+                "{}: the photo's name must end in .png, .jpg, .tif or .dng (with --bayer)",
                 path.display()
             ))),
         }
@@ -62,6 +66,9 @@ fn img_err(e: impl std::fmt::Display) -> SimError {
 
 /// Encodes the recorded image (`linear`, width × height, 1.0 = clipping) in `format`.
 pub fn encode(camera: &Camera, linear: &[f32], format: PhotoFormat) -> Result<Vec<u8>, SimError> {
+    if format == PhotoFormat::Dng {
+        return super::dng::encode(camera, linear);
+    }
     let (w, h) = (camera.width_px as u32, camera.height_px as u32);
     let codes = quantise(camera, linear);
     let bytes8 = || codes.iter().map(|&c| c as u8).collect::<Vec<u8>>();
@@ -73,6 +80,7 @@ pub fn encode(camera: &Camera, linear: &[f32], format: PhotoFormat) -> Result<Ve
     };
     let mut out = Vec::new();
     match format {
+        PhotoFormat::Dng => return super::dng::encode(camera, linear),
         PhotoFormat::Jpeg => {
             if camera.stored_bits() != 8 {
                 return Err(SimError::Parameter(

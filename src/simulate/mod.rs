@@ -18,6 +18,7 @@
 
 pub mod camera;
 pub mod demo;
+pub mod dng;
 pub mod encode;
 pub mod noise;
 pub mod placement;
@@ -295,7 +296,12 @@ pub fn check_output(camera: &Camera, path: &Path) -> Result<PhotoFormat, SimErro
         PhotoFormat::Jpeg if camera.bits != 8 => Err(SimError::Parameter(format!(
             "{shown}: JPEG stores 8 bits; use --bits 8 or a .png/.tif name"
         ))),
-        PhotoFormat::Png | PhotoFormat::Tiff if camera.jpeg_quality.is_some() => {
+        PhotoFormat::Dng if camera.bayer.is_none() => Err(SimError::Parameter(format!(
+            "{shown}: a DNG holds a Bayer mosaic; give --bayer RGGB (or BGGR, GRBG, GBRG)"
+        ))),
+        PhotoFormat::Png | PhotoFormat::Tiff | PhotoFormat::Dng
+            if camera.jpeg_quality.is_some() =>
+        {
             Err(SimError::Parameter(format!(
                 "{shown}: a JPEG quality was given but the name does not end in .jpg"
             )))

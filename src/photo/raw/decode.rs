@@ -1,4 +1,5 @@
-//! The adapter over `rawler` (=0.8.0, the only place the crate is named):
+//! The adapter over `rawler` (=0.8.0; the crate is named only here and in
+//! the lossless-JPEG tile encoder `ljpeg.rs`):
 //! decode a raw file into a [`RawFrame`] and read a raw's EXIF facts. Every
 //! call into rawler runs inside [`guard::contain`], so a decoder panic on a
 //! corrupt file becomes a [`RawError::DecoderPanic`] for that file.
@@ -179,6 +180,23 @@ fn facts_of(
     f
 }
 
+/// Bytes of the file's head tried first for its TIFF EXIF: TIFF-based raws keep
+/// their IFDs ahead of the image data.
+const EXIF_HEAD_BYTES: usize = 4 << 20;
+
+/// The TIFF EXIF facts of a raw file's bytes, read from its first
+/// [`EXIF_HEAD_BYTES`] when they suffice (the EXIF reader copies what it is
+/// given, and a raw's image data is tens of MB), else from the whole file.
+fn tiff_exif(buf: &[u8]) -> Option<ExifFacts> {
+    let read = |b: &[u8]| guard::contain(|| try_facts_from_bytes(b)).ok().flatten();
+    if buf.len() > EXIF_HEAD_BYTES
+        && let Some(f) = read(&buf[..EXIF_HEAD_BYTES])
+    {
+        return Some(f);
+    }
+    read(buf)
+}
+
 /// Reads the EXIF facts of a raw file without decoding its image data.
 pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
     let src = match open(path) {
@@ -196,9 +214,7 @@ pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
         let decoder = rawler::get_decoder(&src)?;
         decoder.raw_metadata(&src, &RawDecodeParams::default())
     });
-    let tiff = guard::contain(|| try_facts_from_bytes(src.buf()))
-        .ok()
-        .flatten();
+    let tiff = tiff_exif(src.buf());
     match outcome {
         Ok(Ok(meta)) => Ok(facts_of(Some(&meta), tiff, "", "")),
         // No rawler metadata: fall back on the TIFF EXIF alone.
@@ -217,18 +233,21 @@ pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
     let src = open(path)?;
     // The TIFF EXIF copy is read and freed before the image buffer exists,
     // so the two never add up in the peak memory.
-    let tiff = guard::contain(|| try_facts_from_bytes(src.buf()))
-        .ok()
-        .flatten();
+    let tiff = tiff_exif(src.buf());
     let outcome = guard::contain(|| {
         let decoder = rawler::get_decoder(&src)?;
         let params = RawDecodeParams::default();
         let meta = decoder.raw_metadata(&src, &params).ok();
         let format = format!("{:?}", decoder.format_hint());
         let image = decoder.raw_image(&src, &params, false)?;
-        Ok::<_, RawlerError>((image, meta, format))
+        let deltas = if format == "DNG" {
+            dng_black_deltas(&src)
+        } else {
+            Deltas::default()
+        };
+        Ok::<_, RawlerError>((image, meta, format, deltas))
     });
-    let (image, meta, format) = match outcome {
+    let (image, meta, format, deltas) = match outcome {
         Ok(Ok(parts)) => parts,
         Ok(Err(e)) => {
             return Err(map_error(path, e, &tiff.unwrap_or_default()));
@@ -243,7 +262,7 @@ pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
     let facts = facts_of(meta.as_ref(), tiff, &image.make, &image.model);
     drop(src);
     let path_text = path.display().to_string();
-    frame_from_image(image, format, facts).map_err(|e| match e {
+    frame_from_image(image, format, facts, deltas).map_err(|e| match e {
         Refusal::Unsupported { make, model, what } => RawError::Unsupported {
             path: path_text,
             make,
@@ -287,10 +306,66 @@ fn frame_rect(image: &RawImage) -> (usize, usize, usize, usize) {
         .unwrap_or(active)
 }
 
+/// DNG BlackLevelDeltaH (per active-area column) and BlackLevelDeltaV (per
+/// active-area row), in DN; rawler 0.8.0 does not apply them.
+#[derive(Debug, Default)]
+struct Deltas {
+    h: Vec<f64>,
+    v: Vec<f64>,
+}
+
+/// Reads BlackLevelDeltaH/V (tags 50715/50716) of the raw IFD rawler decodes
+/// (the first full-resolution IFD with a supported compression); none if absent.
+fn dng_black_deltas(src: &RawSource) -> Deltas {
+    use rawler::formats::tiff::GenericTiffReader;
+    use rawler::formats::tiff::reader::TiffReader;
+    use rawler::tags::{DngTag, TiffCommonTag};
+    let Ok(tiff) = GenericTiffReader::new(&mut src.reader(), 0, 0, None, &[]) else {
+        return Deltas::default();
+    };
+    let raw = tiff
+        .find_ifds_with_tag(TiffCommonTag::Compression)
+        .into_iter()
+        .find(|ifd| {
+            let compression = ifd
+                .get_entry(TiffCommonTag::Compression)
+                .and_then(|e| e.value.get_u32(0).ok().flatten())
+                .unwrap_or(0);
+            let subsampled = ifd
+                .get_entry(TiffCommonTag::NewSubFileType)
+                .and_then(|e| e.value.get_u32(0).ok().flatten())
+                .is_some_and(|t| t & 1 != 0);
+            !subsampled && [1, 7, 8, 0x884c, 52546].contains(&compression)
+        });
+    let Some(raw) = raw else {
+        return Deltas::default();
+    };
+    let read = |tag: DngTag| -> Vec<f64> {
+        raw.get_entry(tag)
+            .map(|e| {
+                (0..e.count() as usize)
+                    .map(|i| {
+                        e.value
+                            .get_f32(i)
+                            .ok()
+                            .flatten()
+                            .map_or(f64::NAN, f64::from)
+                    })
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    Deltas {
+        h: read(DngTag::BlackLevelDeltaH),
+        v: read(DngTag::BlackLevelDeltaV),
+    }
+}
+
 fn frame_from_image(
     image: RawImage,
     format: String,
-    facts: ExifFacts,
+    mut facts: ExifFacts,
+    deltas: Deltas,
 ) -> Result<RawFrame, Refusal> {
     let make = clean_text(&image.make).unwrap_or_default();
     let model = clean_text(&image.model).unwrap_or_default();
@@ -334,7 +409,43 @@ fn frame_from_image(
             None
         }
     };
-    let black = black_levels(&image, (x0, y0), spp);
+    let mut black = black_levels(&image, (x0, y0), spp);
+    // The deltas run over the active area; the frame may start inside it (default crop).
+    let (ax, ay, aw, ah) = image
+        .active_area
+        .as_ref()
+        .map(|r| (r.p.x, r.p.y, r.d.w, r.d.h))
+        .unwrap_or((0, 0, image.width, image.height));
+    for (name, d, start, len, full, out) in [
+        (
+            "BlackLevelDeltaH",
+            &deltas.h,
+            x0 - ax.min(x0),
+            w,
+            aw,
+            &mut black.delta_h,
+        ),
+        (
+            "BlackLevelDeltaV",
+            &deltas.v,
+            y0 - ay.min(y0),
+            h,
+            ah,
+            &mut black.delta_v,
+        ),
+    ] {
+        if d.is_empty() {
+            continue;
+        }
+        if d.len() == full && start + len <= full && d.iter().all(|v| v.is_finite()) {
+            *out = d[start..start + len].to_vec();
+        } else {
+            facts.warnings.push(format!(
+                "{name} has {} values for an active area {full} px across (or unreadable values): ignored",
+                d.len()
+            ));
+        }
+    }
     let white: Vec<f64> = match image.whitelevel.0.len() {
         n if n == spp => image.whitelevel.0.iter().map(|&v| v as f64).collect(),
         0 => vec![((1u64 << image.bps.clamp(1, 16)) - 1) as f64; spp],
@@ -399,10 +510,5 @@ fn black_levels(image: &RawImage, origin: (usize, usize), spp: usize) -> BlackLe
             out.extend_from_slice(&levels[src..src + spp]);
         }
     }
-    BlackLevels {
-        width: bw,
-        height: bh,
-        samples: spp,
-        levels: out,
-    }
+    BlackLevels::repeat(bw, bh, spp, out)
 }

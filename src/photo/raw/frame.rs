@@ -7,6 +7,7 @@
 
 use super::super::Plane;
 use crate::photo::exif::ExifFacts;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::str::FromStr;
 
@@ -179,8 +180,9 @@ impl RawChannel {
     }
 }
 
-/// Black levels in raw units, a pattern repeating from the frame's top-left
-/// pixel: `levels[((y % height) * width + x % width) * samples + s]`.
+/// Black levels in raw units: a pattern repeating from the frame's top-left
+/// pixel, `levels[((y % height) * width + x % width) * samples + s]`, plus a
+/// per-column and a per-row offset (DNG BlackLevelDeltaH/V) when the file has them.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BlackLevels {
     /// Repeat width in pixels.
@@ -191,30 +193,70 @@ pub struct BlackLevels {
     pub samples: usize,
     /// Levels in raw units (DN).
     pub levels: Vec<f64>,
+    /// Added to the level of every sample in frame column x (DN): one value per
+    /// frame column, or empty for none (DNG BlackLevelDeltaH).
+    pub delta_h: Vec<f64>,
+    /// Added to the level of every sample in frame row y (DN): one value per
+    /// frame row, or empty for none (DNG BlackLevelDeltaV).
+    pub delta_v: Vec<f64>,
 }
 
 impl BlackLevels {
     /// One level for every site and sample.
     pub fn uniform(level: f64, samples: usize) -> BlackLevels {
+        BlackLevels::repeat(1, 1, samples, vec![level; samples])
+    }
+
+    /// A repeating pattern of levels (`width × height × samples`, row-major) without deltas.
+    pub fn repeat(width: usize, height: usize, samples: usize, levels: Vec<f64>) -> BlackLevels {
         BlackLevels {
-            width: 1,
-            height: 1,
+            width,
+            height,
             samples,
-            levels: vec![level; samples],
+            levels,
+            delta_h: Vec::new(),
+            delta_v: Vec::new(),
         }
     }
 
     /// The black level (DN) of sample `s` at frame pixel (x, y).
     pub fn at(&self, x: usize, y: usize, s: usize) -> f64 {
         self.levels[((y % self.height) * self.width + x % self.width) * self.samples + s]
+            + self.delta_h.get(x).copied().unwrap_or(0.0)
+            + self.delta_v.get(y).copied().unwrap_or(0.0)
     }
 
-    fn is_valid(&self) -> bool {
+    fn is_valid(&self, frame_width: usize, frame_height: usize) -> bool {
         self.width > 0
             && self.height > 0
             && self.samples > 0
             && self.levels.len() == self.width * self.height * self.samples
-            && self.levels.iter().all(|l| l.is_finite())
+            && (self.delta_h.is_empty() || self.delta_h.len() == frame_width)
+            && (self.delta_v.is_empty() || self.delta_v.len() == frame_height)
+            && self
+                .levels
+                .iter()
+                .chain(&self.delta_h)
+                .chain(&self.delta_v)
+                .all(|l| l.is_finite())
+    }
+
+    /// The largest black level over the frame, per sample (DN).
+    fn max_per_sample(&self) -> Vec<f64> {
+        let dh = self.delta_h.iter().copied().fold(0.0, f64::max);
+        let dv = self.delta_v.iter().copied().fold(0.0, f64::max);
+        (0..self.samples)
+            .map(|s| {
+                self.levels
+                    .iter()
+                    .skip(s)
+                    .step_by(self.samples)
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max)
+                    + dh
+                    + dv
+            })
+            .collect()
     }
 }
 
@@ -270,10 +312,6 @@ pub struct RawFrame {
     pub black: BlackLevels,
     /// White (clipping) level per sample (DN).
     pub white: Vec<f64>,
-    /// Samples in the frame at or above their white level.
-    pub clipped_sites: usize,
-    /// `clipped_sites` over all samples of the frame.
-    pub clipped_fraction: f64,
     /// Camera make as written in the file.
     pub make: String,
     /// Camera model as written in the file.
@@ -316,7 +354,7 @@ impl RawFrame {
         )
     }
 
-    /// Checks the parts, counts clipped samples, and builds the frame.
+    /// Checks the parts and builds the frame.
     pub(crate) fn assemble(
         layout: Layout,
         cfa: Option<CfaPattern>,
@@ -346,17 +384,22 @@ impl RawFrame {
                 spp
             ));
         }
-        if !black.is_valid() || black.samples != spp {
-            return Err(format!("inconsistent black levels {black:?}"));
+        if !black.is_valid(w, h) || black.samples != spp {
+            return Err(format!(
+                "inconsistent black levels ({}×{} repeat of {} levels, {} column and {} row deltas for a {w}×{h} frame)",
+                black.width,
+                black.height,
+                black.levels.len(),
+                black.delta_h.len(),
+                black.delta_v.len()
+            ));
         }
         if white.len() != spp {
             return Err(format!("{} white levels for {spp} samples", white.len()));
         }
-        for (s, &w) in white.iter().enumerate() {
-            for &b in black.levels.iter().skip(s).step_by(spp) {
-                if w.partial_cmp(&b) != Some(std::cmp::Ordering::Greater) {
-                    return Err(format!("white level {w} is not above black level {b}"));
-                }
+        for (&w, b) in white.iter().zip(black.max_per_sample()) {
+            if w.partial_cmp(&b) != Some(std::cmp::Ordering::Greater) {
+                return Err(format!("white level {w} is not above black level {b}"));
             }
         }
         if let Some(c) = &cfa {
@@ -373,15 +416,13 @@ impl RawFrame {
                 return Err("malformed CFA pattern".to_string());
             }
         }
-        let mut frame = RawFrame {
+        let frame = RawFrame {
             width: w,
             height: h,
             cfa,
             samples_per_pixel: spp,
             black,
             white,
-            clipped_sites: 0,
-            clipped_fraction: 0.0,
             make: ids.make,
             model: ids.model,
             format: ids.format,
@@ -390,8 +431,6 @@ impl RawFrame {
             samples,
             layout,
         };
-        frame.clipped_sites = frame.count_clipped();
-        frame.clipped_fraction = frame.clipped_sites as f64 / (w * h * spp) as f64;
         Ok(frame)
     }
 
@@ -401,10 +440,12 @@ impl RawFrame {
         start..start + self.width * l.samples
     }
 
-    fn count_clipped(&self) -> usize {
+    /// Samples in the frame at or above their white level (counted on each call:
+    /// a measurement counts the clipped samples of its own region instead).
+    pub fn clipped_sites(&self) -> usize {
         let spp = self.samples_per_pixel;
         let white: Vec<f32> = self.white.iter().map(|&w| w as f32).collect();
-        // DN ≥ white ⇔ DN ≥ ceil(white) for integers; 65536 never happens in u16.
+        // DN ≥ white ⇔ DN ≥ ceil(white) for integers; above u16::MAX nothing clips.
         let white_dn: Vec<u32> = self
             .white
             .iter()
@@ -414,23 +455,36 @@ impl RawFrame {
         for y in 0..self.height {
             let r = self.row_range(y);
             match &self.samples {
+                // One sample per pixel: a branch-free count the compiler vectorises.
+                Samples::U16(v) if spp == 1 => {
+                    let w = white_dn[0].min(65536);
+                    if w <= u16::MAX as u32 {
+                        let w = w as u16;
+                        n += v[r].iter().map(|&d| usize::from(d >= w)).sum::<usize>();
+                    }
+                }
                 Samples::U16(v) => {
-                    for (i, &d) in v[r].iter().enumerate() {
-                        if d as u32 >= white_dn[i % spp] {
-                            n += 1;
+                    for px in v[r].chunks_exact(spp) {
+                        for (&d, &w) in px.iter().zip(&white_dn) {
+                            n += usize::from(d as u32 >= w);
                         }
                     }
                 }
                 Samples::F32(v) => {
-                    for (i, &d) in v[r].iter().enumerate() {
-                        if d >= white[i % spp] {
-                            n += 1;
+                    for px in v[r].chunks_exact(spp) {
+                        for (&d, &w) in px.iter().zip(&white) {
+                            n += usize::from(d >= w);
                         }
                     }
                 }
             }
         }
         n
+    }
+
+    /// [`RawFrame::clipped_sites`] over all samples of the frame.
+    pub fn clipped_fraction(&self) -> f64 {
+        self.clipped_sites() as f64 / (self.width * self.height * self.samples_per_pixel) as f64
     }
 
     /// Linear value of sample `s` of frame pixel (x, y): (DN − black)/(white − black).
@@ -468,11 +522,33 @@ impl RawFrame {
     /// Planes of `channel` grouped by colour, named "r", "g", "b" (or "grey"
     /// for a monochrome raw): one group per CSV column / plot curve.
     pub fn channel_groups(&self, channel: RawChannel) -> Vec<(&'static str, Vec<Plane>)> {
+        let all = (0, 0, self.width, self.height);
+        self.channel_groups_within(channel, all, &|_| (0, self.width))
+    }
+
+    /// Like [`RawFrame::channel_groups`], but the planes cover only the frame
+    /// rectangle `rect` = (x0, y0, x1, y1) (pixels, end exclusive), and in frame
+    /// row y only the columns `span(y)` = [a, b) are converted; other samples
+    /// stay 0 (their memory is never touched). A measurement region's rows are
+    /// all a measurement reads, so a whole-frame f32 copy is never made.
+    pub fn channel_groups_within(
+        &self,
+        channel: RawChannel,
+        rect: (usize, usize, usize, usize),
+        span: &(dyn Fn(usize) -> (usize, usize) + Sync),
+    ) -> Vec<(&'static str, Vec<Plane>)> {
         let name = |c: CfaColour| match c {
             CfaColour::Red => "r",
             CfaColour::Green => "g",
             CfaColour::Blue => "b",
         };
+        let rect = (
+            rect.0.min(self.width),
+            rect.1.min(self.height),
+            rect.2.min(self.width),
+            rect.3.min(self.height),
+        );
+        let site = |offset, step, s| self.site_plane(offset, step, s, rect, span);
         match (&self.cfa, self.samples_per_pixel) {
             (Some(cfa), _) => {
                 let (pw, ph) = cfa.size();
@@ -483,7 +559,7 @@ impl RawFrame {
                         let planes = (0..ph)
                             .flat_map(|y| (0..pw).map(move |x| (x, y)))
                             .filter(|&(x, y)| cfa.colour_at(x, y) == c)
-                            .map(|(x, y)| self.site_plane((x, y), (pw, ph), 0))
+                            .map(|(x, y)| site((x, y), (pw, ph), 0))
                             .filter(|p| p.width > 0 && p.height > 0)
                             .collect();
                         (name(c), planes)
@@ -500,68 +576,117 @@ impl RawFrame {
                         CfaColour::Green => 1,
                         CfaColour::Blue => 2,
                     };
-                    (name(c), vec![self.site_plane((0, 0), (1, 1), s)])
+                    (name(c), vec![site((0, 0), (1, 1), s)])
                 })
                 .collect(),
-            (None, _) => vec![("grey", vec![self.site_plane((0, 0), (1, 1), 0)])],
+            (None, _) => vec![("grey", vec![site((0, 0), (1, 1), 0)])],
         }
     }
 
-    /// The plane of sample `s` on the lattice with `step` and `offset` (frame pixels).
-    fn site_plane(&self, offset: (usize, usize), step: (usize, usize), s: usize) -> Plane {
-        let pw = if offset.0 < self.width {
-            (self.width - offset.0).div_ceil(step.0)
-        } else {
-            0
+    /// One whole-frame plane for finding the chart: on a Bayer mosaic the
+    /// first green lattice (a quarter of the pixels, at their true positions);
+    /// on other mosaics every site (colours unbalanced); on linear RGB the G
+    /// samples; on a monochrome raw its one plane.
+    pub fn location_plane(&self) -> Plane {
+        let all = (0, 0, self.width, self.height);
+        let span = |_| (0, self.width);
+        match (&self.cfa, self.samples_per_pixel) {
+            (Some(cfa), _) if cfa.size() == (2, 2) => {
+                let g = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                    .into_iter()
+                    .find(|&(x, y)| cfa.colour_at(x, y) == CfaColour::Green)
+                    .unwrap_or((0, 0));
+                self.site_plane(g, (2, 2), 0, all, &span)
+            }
+            (None, 3) => self.site_plane((0, 0), (1, 1), 1, all, &span),
+            _ => self.site_plane((0, 0), (1, 1), 0, all, &span),
+        }
+    }
+
+    /// The plane of sample `s` on the lattice with `step` and `offset` (frame
+    /// pixels), over the sites inside `rect`, converting only columns `span(y)`.
+    fn site_plane(
+        &self,
+        offset: (usize, usize),
+        step: (usize, usize),
+        s: usize,
+        rect: (usize, usize, usize, usize),
+        span: &(dyn Fn(usize) -> (usize, usize) + Sync),
+    ) -> Plane {
+        // First lattice index at or after `lo`, and the count of sites in [lo, hi).
+        let range = |off: usize, st: usize, lo: usize, hi: usize| {
+            let first = if lo > off { (lo - off).div_ceil(st) } else { 0 };
+            let start = off + first * st;
+            let n = if start < hi {
+                (hi - start).div_ceil(st)
+            } else {
+                0
+            };
+            (start, n)
         };
-        let ph = if offset.1 < self.height {
-            (self.height - offset.1).div_ceil(step.1)
-        } else {
-            0
-        };
+        let (x0, pw) = range(offset.0, step.0, rect.0, rect.2);
+        let (y0, ph) = range(offset.1, step.1, rect.1, rect.3);
         let spp = self.samples_per_pixel;
-        let mut data = Vec::with_capacity(pw * ph);
+        let mut data = vec![0f32; pw * ph];
         // Constant black along the plane when the black repeat divides the lattice step.
-        let constant =
-            step.0.is_multiple_of(self.black.width) && step.1.is_multiple_of(self.black.height);
-        for j in 0..ph {
-            let y = offset.1 + j * step.1;
+        let constant = step.0.is_multiple_of(self.black.width)
+            && step.1.is_multiple_of(self.black.height)
+            && self.black.delta_h.is_empty();
+        let fill_row = |j: usize, out: &mut [f32]| {
+            let y = y0 + j * step.1;
+            let (a, b) = span(y);
+            let (a, b) = (a.max(x0), b.min(rect.2));
+            if a >= b {
+                return;
+            }
+            // Lattice columns i with x = x0 + i·step in [a, b).
+            let i0 = (a - x0).div_ceil(step.0);
+            let i1 = ((b - x0).div_ceil(step.0)).min(pw);
+            if i0 >= i1 {
+                return;
+            }
+            let out = &mut out[i0..i1];
             let row = self.row_range(y);
-            let first = offset.0 * spp + s;
+            let first = (x0 + i0 * step.0) * spp + s;
             let stride = step.0 * spp;
             if constant {
-                let b = self.black.at(offset.0, y, s);
+                let b = self.black.at(x0, y, s);
                 let scale = 1.0 / (self.white[s] - b);
                 let (b, scale) = (b as f32, scale as f32);
                 match &self.samples {
-                    Samples::U16(v) => data.extend(
-                        v[row]
-                            .iter()
-                            .skip(first)
-                            .step_by(stride)
-                            .take(pw)
-                            .map(|&d| (d as f32 - b) * scale),
-                    ),
-                    Samples::F32(v) => data.extend(
-                        v[row]
-                            .iter()
-                            .skip(first)
-                            .step_by(stride)
-                            .take(pw)
-                            .map(|&d| (d - b) * scale),
-                    ),
+                    Samples::U16(v) => {
+                        for (o, &d) in out
+                            .iter_mut()
+                            .zip(v[row].iter().skip(first).step_by(stride))
+                        {
+                            *o = (d as f32 - b) * scale;
+                        }
+                    }
+                    Samples::F32(v) => {
+                        for (o, &d) in out
+                            .iter_mut()
+                            .zip(v[row].iter().skip(first).step_by(stride))
+                        {
+                            *o = (d - b) * scale;
+                        }
+                    }
                 }
             } else {
-                for i in 0..pw {
-                    data.push(self.value(offset.0 + i * step.0, y, s));
+                for (k, o) in out.iter_mut().enumerate() {
+                    *o = self.value(x0 + (i0 + k) * step.0, y, s);
                 }
             }
+        };
+        if pw > 0 {
+            data.par_chunks_mut(pw)
+                .enumerate()
+                .for_each(|(j, out)| fill_row(j, out));
         }
         Plane {
             width: pw,
             height: ph,
             step,
-            offset,
+            offset: (x0, y0),
             data,
         }
     }
@@ -593,12 +718,7 @@ mod tests {
     fn mosaic() -> RawFrame {
         let (w, h) = (7, 5);
         let data: Vec<u16> = (0..w * h).map(|i| 100 + i as u16 * 10).collect();
-        let black = BlackLevels {
-            width: 2,
-            height: 2,
-            samples: 1,
-            levels: vec![100.0, 90.0, 80.0, 70.0],
-        };
+        let black = BlackLevels::repeat(2, 2, 1, vec![100.0, 90.0, 80.0, 70.0]);
         RawFrame::from_mosaic_u16(w, h, CfaPattern::Rggb, black, 440.0, data).unwrap()
     }
 
@@ -637,7 +757,59 @@ mod tests {
         assert_eq!((g[0].offset, g[0].width, g[0].height), ((1, 0), 3, 3));
         assert_eq!((g[1].offset, g[1].width, g[1].height), ((0, 1), 4, 2));
         // DN 440 and above are clipped: pixels with 100 + 10 i >= 440 → i >= 34 → one pixel
-        assert_eq!(f.clipped_sites, 1);
+        assert_eq!(f.clipped_sites(), 1);
+    }
+
+    #[test]
+    fn windowed_planes_hold_exactly_the_sites_in_the_rectangle_and_spans() {
+        let f = mosaic();
+        let rect = (1, 1, 6, 5);
+        // Row y converts columns [y, y + 3) only.
+        let span = |y: usize| (y, y + 3);
+        for ch in [RawChannel::R, RawChannel::G, RawChannel::B] {
+            let planes = f.channel_groups_within(ch, rect, &span);
+            let planes: Vec<&Plane> = planes.iter().flat_map(|g| &g.1).collect();
+            let mut seen = 0;
+            for p in &planes {
+                for j in 0..p.height {
+                    for i in 0..p.width {
+                        let (cx, cy) = p.centre(i, j);
+                        let (x, y) = ((cx - 0.5) as usize, (cy - 0.5) as usize);
+                        assert!(x >= rect.0 && x < rect.2 && y >= rect.1 && y < rect.3);
+                        assert!(ch.colours().contains(&CfaPattern::Rggb.colour_at(x, y)));
+                        let want = if x >= y && x < y + 3 {
+                            f.value(x, y, 0)
+                        } else {
+                            0.0
+                        };
+                        assert!((p.get(i, j) - want).abs() < 1e-6, "({x},{y})");
+                        seen += 1;
+                    }
+                }
+            }
+            let all = (rect.1..rect.3)
+                .flat_map(|y| (rect.0..rect.2).map(move |x| (x, y)))
+                .filter(|&(x, y)| ch.colours().contains(&CfaPattern::Rggb.colour_at(x, y)))
+                .count();
+            assert_eq!(seen, all, "{ch:?}: every site of the rectangle once");
+        }
+    }
+
+    #[test]
+    fn the_location_plane_is_one_green_lattice_at_true_positions() {
+        let f = mosaic();
+        let p = f.location_plane();
+        assert_eq!(
+            (p.step, p.offset, p.width, p.height),
+            ((2, 2), (1, 0), 3, 3)
+        );
+        for j in 0..p.height {
+            for i in 0..p.width {
+                let (x, y) = (1 + 2 * i, 2 * j);
+                assert_eq!(CfaPattern::Rggb.colour_at(x, y), CfaColour::Green);
+                assert!((p.get(i, j) - f.value(x, y, 0)).abs() < 1e-6);
+            }
+        }
     }
 
     #[test]
