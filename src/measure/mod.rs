@@ -304,18 +304,7 @@ pub fn measure_raw(
         _ => {
             let given = resolve_roi(opts, frame.width, frame.height).map_err(err)?;
             if opts.refine_roi {
-                let plane = frame.location_plane();
-                let refined = crate::locate::refine_roi(&plane, given, target, REFINE_SEARCH_PX)
-                    .map_err(|e| err(Failure::Region(format!("--refine-roi: {e}"))))?;
-                let moved = given
-                    .iter()
-                    .zip(&refined)
-                    .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-                    .fold(0.0, f64::max);
-                warnings.push(format!(
-                    "region corners refined to the edges (moved up to {moved:.2} px)"
-                ));
-                refined
+                refine_or_keep(&frame.location_plane(), given, target, &mut warnings)
             } else {
                 given
             }
@@ -344,50 +333,9 @@ pub fn measure_raw(
     if opts.gamma.is_some() || opts.tone_chart {
         warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
     }
-    // Only what binning reads is converted to f32: the sweep strips (the whole
-    // region when there are sine patches or no target), each row's span ± 2 px.
-    let read: Vec<[Point; 4]> = match (target, strips(&roi, target)) {
-        (Some(t), Ok(specs)) if t.patches.is_empty() && !specs.is_empty() => specs
-            .iter()
-            .map(|(_, strip, _, _)| strip.image_quad(0.0, strip.width))
-            .collect(),
-        _ => vec![roi],
-    };
-    let corners: Vec<Point> = read.iter().flatten().copied().collect();
-    let (xs, ys) = (corners.iter().map(|p| p[0]), corners.iter().map(|p| p[1]));
-    let bbox = [
-        [
-            xs.clone().fold(f64::INFINITY, f64::min),
-            ys.clone().fold(f64::INFINITY, f64::min),
-        ],
-        [
-            xs.fold(f64::NEG_INFINITY, f64::max),
-            ys.fold(f64::NEG_INFINITY, f64::max),
-        ],
-    ];
-    let crop = bbox_crop(
-        &[
-            bbox[0],
-            [bbox[1][0], bbox[0][1]],
-            bbox[1],
-            [bbox[0][0], bbox[1][1]],
-        ],
-        frame.width,
-        frame.height,
-        2.0,
-    );
-    let span = |y: usize| {
-        read.iter()
-            .map(|q| raw_row_span(q, y))
-            .filter(|(a, b)| a < b)
-            .fold((0, 0), |(lo, hi), (a, b)| {
-                if lo >= hi {
-                    (a, b)
-                } else {
-                    (lo.min(a), hi.max(b))
-                }
-            })
-    };
+    // Only what binning reads is converted to f32.
+    let (crop, span) =
+        read_set(&roi, target, opts.margin, frame.width, frame.height).map_err(err)?;
     let groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
     let pitch =
         crate::photo::pitch::resolve(&frame.facts, frame.width, frame.height, opts.pixel_pitch_mm);
@@ -427,22 +375,30 @@ pub fn measure_raw(
     Ok(m)
 }
 
-/// Columns [a, b) of frame row `y` that a measurement of `roi` reads: the
-/// region's span over y ± 2 px, widened by 2 px (3 on the right).
-fn raw_row_span(roi: &[Point; 4], y: usize) -> (usize, usize) {
-    let yc = y as f64 + 0.5;
-    let mut lo = f64::INFINITY;
-    let mut hi = f64::NEG_INFINITY;
-    for dy in [-2.0, 0.0, 2.0] {
-        if let Some((a, b)) = profile::row_span(roi, yc + dy) {
-            lo = lo.min(a);
-            hi = hi.max(b);
+/// The given corners refined to the edges seen in `plane`, or as given (with
+/// a warning saying why) when the edges are not clearly seen.
+fn refine_or_keep(
+    plane: &Plane,
+    given: [Point; 4],
+    target: Option<&Target>,
+    warnings: &mut Vec<String>,
+) -> [Point; 4] {
+    match crate::locate::refine_roi(plane, given, target, REFINE_SEARCH_PX) {
+        Ok(refined) => {
+            let moved = given
+                .iter()
+                .zip(&refined)
+                .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                .fold(0.0, f64::max);
+            warnings.push(format!(
+                "region corners refined to the edges (moved up to {moved:.2} px)"
+            ));
+            refined
         }
-    }
-    if lo > hi {
-        (0, 0)
-    } else {
-        ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
+        Err(e) => {
+            warnings.push(format!("region corners used as given: {e}"));
+            given
+        }
     }
 }
 
@@ -508,23 +464,7 @@ pub fn measure_decoded(
                 // Only the region and the search band around it are converted.
                 let crop = bbox_crop(&given, dec.width, dec.height, REFINE_SEARCH_PX + 8.0);
                 let grey = planes(dec, crop, &default_tone(dec.bits()).0, Channel::Luma);
-                match crate::locate::refine_roi(&grey[0], given, target, REFINE_SEARCH_PX) {
-                    Ok(refined) => {
-                        let moved = given
-                            .iter()
-                            .zip(&refined)
-                            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-                            .fold(0.0, f64::max);
-                        warnings.push(format!(
-                            "region corners refined to the edges (moved up to {moved:.2} px)"
-                        ));
-                        refined
-                    }
-                    Err(e) => {
-                        warnings.push(format!("region corners used as given: {e}"));
-                        given
-                    }
-                }
+                refine_or_keep(&grey[0], given, target, &mut warnings)
             } else {
                 given
             }
@@ -557,37 +497,8 @@ pub fn measure_decoded(
         (t, d)
     };
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
-    // Convert only what binning reads: the rows' spans (+2 px) of the strips'
-    // and patches' binned regions.
-    let binned = binned_quads(&roi, target, opts.margin).map_err(err)?;
-    let crop = binned
-        .iter()
-        .map(|q| bbox_crop(q, dec.width, dec.height, 3.0))
-        .reduce(|a, b| Crop {
-            x0: a.x0.min(b.x0),
-            y0: a.y0.min(b.y0),
-            x1: a.x1.max(b.x1),
-            y1: a.y1.max(b.y1),
-        })
-        .unwrap_or(crop);
-    let span = |y: usize| -> (usize, usize) {
-        let yc = y as f64 + 0.5;
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for q in &binned {
-            for dy in [-2.0, 0.0, 2.0] {
-                if let Some((a, b)) = profile::row_span(q, yc + dy) {
-                    lo = lo.min(a);
-                    hi = hi.max(b);
-                }
-            }
-        }
-        if lo > hi {
-            (0, 0)
-        } else {
-            ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
-        }
-    };
+    // Convert only what binning reads.
+    let (crop, span) = read_set(&roi, target, opts.margin, dec.width, dec.height).map_err(err)?;
     let ps = planes_within(dec, crop, &tone, opts.channel, &span);
     let names = plane_names(opts.channel, dec.channels);
     let preview = make_preview(dec, &roi);
@@ -737,6 +648,49 @@ fn binned_quads(
         );
     }
     Ok(quads)
+}
+
+/// What a measurement reads: the crop around the binned regions, and for each
+/// image row y the columns [a, b) to convert (the regions' span over y ± 2 px,
+/// widened by 2 px, 3 on the right).
+#[allow(clippy::type_complexity)]
+fn read_set(
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    margin: f64,
+    width: usize,
+    height: usize,
+) -> Result<(Crop, impl Fn(usize) -> (usize, usize) + Sync), Failure> {
+    let quads = binned_quads(roi, target, margin)?;
+    let crop = quads
+        .iter()
+        .map(|q| bbox_crop(q, width, height, 3.0))
+        .reduce(|a, b| Crop {
+            x0: a.x0.min(b.x0),
+            y0: a.y0.min(b.y0),
+            x1: a.x1.max(b.x1),
+            y1: a.y1.max(b.y1),
+        })
+        .unwrap_or_else(|| bbox_crop(roi, width, height, 2.0));
+    let span = move |y: usize| -> (usize, usize) {
+        let yc = y as f64 + 0.5;
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for q in &quads {
+            for dy in [-2.0, 0.0, 2.0] {
+                if let Some((a, b)) = profile::row_span(q, yc + dy) {
+                    lo = lo.min(a);
+                    hi = hi.max(b);
+                }
+            }
+        }
+        if lo > hi {
+            (0, 0)
+        } else {
+            ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
+        }
+    };
+    Ok((crop, span))
 }
 
 /// The homography from the target frame (mm) to the image, given the target's corners in the image.
