@@ -499,9 +499,11 @@ pub fn measure_decoded(
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
     // Convert only what binning reads.
     let (crop, span) = read_set(&roi, target, opts.margin, dec.width, dec.height).map_err(err)?;
-    let ps = planes_within(dec, crop, &tone, opts.channel, &span);
+    let (ps, preview) = rayon::join(
+        || planes_within(dec, crop, &tone, opts.channel, &span),
+        || make_preview(dec, &roi),
+    );
     let names = plane_names(opts.channel, dec.channels);
-    let preview = make_preview(dec, &roi);
     let groups: Vec<(&str, Vec<Plane>)> = names
         .into_iter()
         .zip(ps.into_iter().map(|p| vec![p]))
@@ -935,7 +937,14 @@ fn measure_strip(
             None => &[LawKind::Linear, LawKind::Log],
         };
         if let Some((found, _)) = law::initial_laws(&prof, kinds, s_per_px, 0.3) {
-            laws.extend(found.into_iter().map(|(l, _)| l));
+            // A family that fits the crossings 4× worse than the best is not refined.
+            let best = found.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
+            laws.extend(
+                found
+                    .into_iter()
+                    .filter(|(_, rms)| *rms <= 4.0 * best.max(1e-3))
+                    .map(|(l, _)| l),
+            );
         }
     }
     if laws.is_empty() {
@@ -1077,18 +1086,27 @@ fn refine_law(
             return result;
         }
         let table = PhaseTable::new(prof, &law);
-        let mut pts = Vec::new();
-        let mut prev_shift: Option<f64> = None;
+        // One fit per cycle up to 0.85 of the band limit, computed in parallel,
+        // then accepted in order while the phase shift stays continuous.
         let (p_lo, p_hi) = (law.phase(s_lo), law.phase(s_hi));
+        let mut at = Vec::new();
         let mut p = p_lo + 1.5;
         while p < p_hi - 1.5 {
             let s = law.s_at_phase(p, s_lo, s_hi);
-            let f_px = law.freq(s) * s_per_px(s);
-            if f_px > 0.85 * band_limit(s) {
+            if law.freq(s) * s_per_px(s) > 0.85 * band_limit(s) {
                 break;
             }
-            let Some(fit) = local_fit(prof, &table, &law, s, 2.0) else {
-                p += 1.0;
+            at.push((p, s));
+            p += 1.0;
+        }
+        let fits: Vec<_> = at
+            .par_iter()
+            .map(|&(p, s)| (p, s, local_fit(prof, &table, &law, s, 2.0)))
+            .collect();
+        let mut pts = Vec::new();
+        let mut prev_shift: Option<f64> = None;
+        for (p, s, fit) in fits {
+            let Some(fit) = fit else {
                 continue;
             };
             let snr = fit.amp / fit.amp_var.sqrt().max(1e-12);
@@ -1096,7 +1114,6 @@ fn refine_law(
                 if pts.len() >= 8 {
                     break;
                 }
-                p += 1.0;
                 continue;
             }
             let mut shift = fit.phase_shift;
@@ -1108,7 +1125,6 @@ fn refine_law(
             }
             prev_shift = Some(shift);
             pts.push((s, p + shift, snr.min(1e3).powi(2)));
-            p += 1.0;
         }
         if pts.len() < 6 {
             return result;
@@ -1162,7 +1178,7 @@ fn output_grid(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Vec<f64> {
 fn local_freq_deviation(prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<(f64, f64)> {
     let table = PhaseTable::new(prof, law);
     let fits: Vec<(f64, f64, f64)> = grid
-        .iter()
+        .par_iter()
         .filter_map(|&s| {
             let f = local_fit(prof, &table, law, s, 2.0)?;
             let snr = f.amp / f.amp_var.sqrt().max(1e-12);

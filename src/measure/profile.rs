@@ -160,40 +160,59 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
         bin,
         nbins,
     };
-    let acc = Vec::new();
     let mut prof = Profile {
         bin,
         length: strip.length,
         ..Profile::default()
     };
-    // First pass in parallel over a fixed split of the bands (the same split
-    // on any machine, merged in order: results do not depend on threads).
-    let bands = region.bands();
-    let per = bands.len().div_ceil(PASS_CHUNKS).max(1);
-    let parts: Vec<(Vec<BinAcc>, [usize; 3])> = bands
-        .par_chunks(per)
-        .map(|chunk| {
-            let mut acc = vec![BinAcc::default(); nbins];
+    // First pass in parallel, split along the sweep into PASS_CHUNKS runs of
+    // bins: each piece owns its bins (no merging, and the same split on any
+    // machine, so results do not depend on threads). A piece visits the
+    // region narrowed to its s-range (plus a hair, so no sample at a boundary
+    // is lost to rounding) and keeps only the samples of its own bins.
+    let b_first = ((s_lo / bin) as usize).min(nbins - 1);
+    let b_end = ((s_hi / bin) as usize + 1).min(nbins);
+    let runs: Vec<(usize, usize)> = (0..PASS_CHUNKS)
+        .map(|k| {
+            let n = b_end - b_first;
+            (
+                b_first + n * k / PASS_CHUNKS,
+                b_first + n * (k + 1) / PASS_CHUNKS,
+            )
+        })
+        .filter(|(b0, b1)| b1 > b0)
+        .collect();
+    let hair = 1e-6 * bin;
+    let parts: Vec<(Vec<BinAcc>, [usize; 3])> = runs
+        .par_iter()
+        .map(|&(b0, b1)| {
+            let piece = Region {
+                s_lo: s_lo.max(b0 as f64 * bin - hair),
+                s_hi: s_hi.min(b1 as f64 * bin + hair),
+                ..region
+            };
+            let mut acc = vec![BinAcc::default(); b1 - b0];
             let mut count = [0usize; 3];
-            for band in chunk {
-                region.visit_band(band, |b, s, v| {
-                    count[0] += 1;
-                    count[1] += (v >= opts.clip_level) as usize;
-                    count[2] += (v <= 0.0) as usize;
-                    acc[b].add(s, v);
+            for band in piece.bands() {
+                piece.visit_band(&band, |b, s, v| {
+                    if b >= b0 && b < b1 {
+                        count[0] += 1;
+                        count[1] += (v >= opts.clip_level) as usize;
+                        count[2] += (v <= 0.0) as usize;
+                        acc[b - b0].add(s, v);
+                    }
                 });
             }
             (acc, count)
         })
         .collect();
-    let mut parts = parts.into_iter();
-    let (mut acc, mut count) = parts.next().unwrap_or((acc, [0; 3]));
-    for (more, c) in parts {
-        for (a, b) in acc.iter_mut().zip(&more) {
-            a.merge(b);
-        }
+    let mut acc = vec![BinAcc::default(); b_first];
+    let mut count = [0usize; 3];
+    for (part, c) in parts {
+        acc.extend(part);
         count.iter_mut().zip(c).for_each(|(x, y)| *x += y);
     }
+    acc.resize(nbins, BinAcc::default());
     prof.samples = count[0];
     prof.clipped_high = count[1];
     prof.clipped_low = count[2];
@@ -266,8 +285,8 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
 /// How many of the most extreme samples each bin keeps on either side.
 const EXTREMES: usize = 3;
 
-/// How many pieces the first binning pass is split into (run in parallel).
-const PASS_CHUNKS: usize = 4;
+/// How many runs of bins the first binning pass is split into (run in parallel).
+const PASS_CHUNKS: usize = 8;
 
 /// One bin's running sums, and its most extreme samples for the robust mean.
 #[derive(Clone, Copy)]
@@ -301,26 +320,6 @@ impl Default for BinAcc {
     }
 }
 
-/// The first EXTREMES of two lists sorted by `first` (a before b when first(a, b)).
-fn merge_sorted(
-    a: [f32; EXTREMES],
-    b: [f32; EXTREMES],
-    first: impl Fn(f32, f32) -> bool,
-) -> [f32; EXTREMES] {
-    let mut out = a;
-    let (mut i, mut j) = (0, 0);
-    for o in out.iter_mut() {
-        if first(a[i], b[j]) {
-            *o = a[i];
-            i += 1;
-        } else {
-            *o = b[j];
-            j += 1;
-        }
-    }
-    out
-}
-
 /// The larger of two values, as one `maxss` (no NaN reaches here).
 #[inline(always)]
 fn fmax(a: f32, b: f32) -> f32 {
@@ -334,20 +333,6 @@ fn fmin(a: f32, b: f32) -> f32 {
 }
 
 impl BinAcc {
-    /// Adds another accumulator's samples to this one.
-    fn merge(&mut self, o: &BinAcc) {
-        if o.n == 0 {
-            return;
-        }
-        self.sum += o.sum;
-        self.sum2 += o.sum2;
-        self.ssum += o.ssum;
-        self.ssum2 += o.ssum2;
-        self.n += o.n;
-        self.hi = merge_sorted(self.hi, o.hi, |a, b| a >= b);
-        self.lo = merge_sorted(self.lo, o.lo, |a, b| a <= b);
-    }
-
     /// Adds a sample at position `s` with value `v` (branch-free insertion
     /// into the sorted extremes).
     #[inline(always)]

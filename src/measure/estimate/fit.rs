@@ -65,26 +65,25 @@ pub struct PhaseTable {
 impl PhaseTable {
     /// Tabulates `law` over the bins of `prof`.
     pub fn new(prof: &Profile, law: &PhaseLaw) -> PhaseTable {
-        let n = prof.s.len();
-        let (mut phase, mut cos, mut sin) = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-        );
-        for k in 0..n {
-            let s = prof.s[k];
-            let ph = law.phase(s);
-            let att = if prof.var_s[k] > 0.0 {
-                bin_attenuation(law.freq(s), prof.var_s[k])
-            } else {
-                1.0
-            };
-            let (sn, cs) = (2.0 * PI * (ph - ph.floor())).sin_cos();
-            phase.push(ph);
-            cos.push(att * cs);
-            sin.push(att * sn);
+        let rows: Vec<(f64, f64, f64)> = (0..prof.s.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|k| {
+                let (ph, f) = law.phase_freq(prof.s[k]);
+                let att = if prof.var_s[k] > 0.0 {
+                    bin_attenuation(f, prof.var_s[k])
+                } else {
+                    1.0
+                };
+                let (sn, cs) = (2.0 * PI * (ph - ph.floor())).sin_cos();
+                (ph, att * cs, att * sn)
+            })
+            .collect();
+        PhaseTable {
+            phase: rows.iter().map(|r| r.0).collect(),
+            cos: rows.iter().map(|r| r.1).collect(),
+            sin: rows.iter().map(|r| r.2).collect(),
         }
-        PhaseTable { phase, cos, sin }
     }
 }
 
