@@ -225,13 +225,14 @@ fn lsq2(pts: &[(f64, f64, f64)], k: f64) -> Option<([f64; 2], f64)> {
 
 /// Weighted least squares with up to three basis functions (a zero third column is dropped).
 fn lsq(pts: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<([f64; 3], f64)> {
-    let third = pts.iter().any(|p| basis(p.0)[2] != 0.0);
+    // Each point's basis values once (they may cost an exponential each).
+    let xs: Vec<[f64; 3]> = pts.iter().map(|p| basis(p.0)).collect();
+    let third = xs.iter().any(|x| x[2] != 0.0);
     let n = if third { 3 } else { 2 };
     let mut a = [[0.0; 3]; 3];
     let mut r = [0.0; 3];
     let mut wsum = 0.0;
-    for &(s, y, w) in pts {
-        let x = basis(s);
+    for (&(_, y, w), x) in pts.iter().zip(&xs) {
         for i in 0..n {
             r[i] += w * x[i] * y;
             for j in 0..n {
@@ -243,8 +244,8 @@ fn lsq(pts: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<([f64
     let c = solve(&mut a, &mut r, n)?;
     let rss: f64 = pts
         .iter()
-        .map(|&(s, y, w)| {
-            let x = basis(s);
+        .zip(&xs)
+        .map(|(&(_, y, w), x)| {
             let p: f64 = (0..n).map(|i| c[i] * x[i]).sum();
             w * (y - p) * (y - p)
         })

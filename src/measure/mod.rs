@@ -985,9 +985,12 @@ fn measure_strip(
     }
     let grid = output_grid(&law, prof.s[0], prof.s[prof.s.len() - 1]);
     let est = opts.method.estimator(opts.window_cycles);
-    let mods = est.estimate(&prof, &law, &grid);
-    // Data-based aliasing check: the image's local frequency versus the law.
-    let dev = local_freq_deviation(&prof, &law, &grid);
+    // The modulation, and beside it the data-based aliasing check (the
+    // image's local frequency versus the law).
+    let (mods, dev) = rayon::join(
+        || est.estimate(&prof, &law, &grid),
+        || local_freq_deviation(&prof, &law, &grid),
+    );
     let mut points: Vec<MtfPoint> = mods
         .iter()
         .map(|m| {
