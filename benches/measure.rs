@@ -4,26 +4,9 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use sweepmtf::measure::synth::{SynthShot, standard_cases, strip_quad};
+use sweepmtf::measure::synth::big_shot;
 use sweepmtf::measure::{MeasureOptions, measure_decoded};
 use sweepmtf::photo::decode::decode_bytes;
-
-fn big_shot() -> SynthShot {
-    let base = standard_cases().remove(1);
-    SynthShot {
-        name: "big".into(),
-        width: 6000,
-        height: 4000,
-        quad: strip_quad(3000.0, 2000.0, 5600.0, 400.0, 3.0, 0.0),
-        length: 5600.0,
-        strip_width: 400.0,
-        law: sweepmtf::measure::PhaseLaw {
-            c2: (0.6f64 / 0.004).ln() / 5600.0,
-            ..base.law
-        },
-        ..base
-    }
-}
 
 fn bench(c: &mut Criterion) {
     let shot = big_shot();

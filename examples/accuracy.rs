@@ -52,25 +52,6 @@ fn score(shot: &SynthShot, bytes: &[u8], opts: &MeasureOptions) -> Result<Score,
     })
 }
 
-/// The 24-megapixel shot of the speed check: a 5600×400 px log sweep, SNR ≈ 50, JPEG q90.
-pub fn big_shot() -> SynthShot {
-    use sweepmtf::measure::synth::strip_quad;
-    let base = standard_cases().remove(1);
-    SynthShot {
-        name: "big".into(),
-        width: 6000,
-        height: 4000,
-        quad: strip_quad(3000.0, 2000.0, 5600.0, 400.0, 3.0, 0.0),
-        length: 5600.0,
-        strip_width: 400.0,
-        law: sweepmtf::measure::PhaseLaw {
-            c2: (0.6f64 / 0.004).ln() / 5600.0,
-            ..base.law
-        },
-        ..base
-    }
-}
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let quick = args.iter().any(|a| a == "--quick");
@@ -78,7 +59,7 @@ fn main() {
     if let Some(i) = args.iter().position(|a| a == "--write-big") {
         // A 24-megapixel JPEG (6000×4000, quality 90) for the speed and memory check.
         let path = args.get(i + 1).map(String::as_str).unwrap_or("big.jpg");
-        let shot = big_shot();
+        let shot = sweepmtf::measure::synth::big_shot();
         std::fs::write(path, shot.encode(5)).expect("write");
         let roi: Vec<String> = shot
             .quad

@@ -217,3 +217,22 @@ pub fn standard_cases() -> Vec<SynthShot> {
         },
     ]
 }
+
+/// The 24-megapixel shot of the speed check (benches/measure.rs, examples/accuracy.rs):
+/// 6000×4000, a 5600×400 px log sweep 0.004→0.6 cy/px turned 3°, SNR ≈ 50, JPEG q90.
+pub fn big_shot() -> SynthShot {
+    let base = standard_cases().remove(1);
+    SynthShot {
+        name: "big".into(),
+        width: 6000,
+        height: 4000,
+        quad: strip_quad(3000.0, 2000.0, 5600.0, 400.0, 3.0, 0.0),
+        length: 5600.0,
+        strip_width: 400.0,
+        law: super::PhaseLaw {
+            c2: (0.6f64 / 0.004).ln() / 5600.0,
+            ..base.law
+        },
+        ..base
+    }
+}
