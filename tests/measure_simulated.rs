@@ -205,3 +205,46 @@ fn with_the_target_the_printed_contrast_normalises() {
     assert!(n > 40, "{n} points");
     assert!(rms <= 0.015, "RMS {rms:.4}");
 }
+
+/// The plane converted for corner refinement is reused for the measurement:
+/// the result must equal a fresh conversion at the same (refined) corners.
+#[test]
+fn refinement_plane_reuse_changes_nothing() {
+    let c = case("reuse", noisy(camera()), 0.8, PhotoFormat::Jpeg);
+    let (shot, t, bytes) = shoot(&c);
+    let dec = decode_bytes(&bytes, c.name).unwrap();
+    let q = shot.target_corners;
+    let given = [
+        [q[0] + 2.0, q[1] - 1.5],
+        [q[2] - 1.0, q[3] + 2.0],
+        [q[4] + 1.5, q[5] + 1.0],
+        [q[6] - 2.0, q[7] - 1.0],
+    ];
+    let refined = measure_decoded(
+        &dec,
+        c.name,
+        Some(&t),
+        &MeasureOptions {
+            roi: Some(given),
+            refine_roi: true,
+            ..MeasureOptions::default()
+        },
+    )
+    .unwrap();
+    let fresh = measure_decoded(
+        &dec,
+        c.name,
+        Some(&t),
+        &MeasureOptions {
+            roi: Some(refined.roi),
+            refine_roi: false,
+            ..MeasureOptions::default()
+        },
+    )
+    .unwrap();
+    let (a, b) = (&refined.curves[0].points, &fresh.curves[0].points);
+    assert_eq!(a.len(), b.len());
+    for (p, q) in a.iter().zip(b) {
+        assert_eq!(p.mtf.to_bits(), q.mtf.to_bits(), "{} cy/px", p.freq_cy_px);
+    }
+}

@@ -448,6 +448,8 @@ pub fn measure_decoded(
     };
     check_options(opts).map_err(err)?;
     let mut warnings = Vec::new();
+    // The luminance plane refinement converted, kept for the measurement when it can serve.
+    let mut seen: Option<(Crop, Plane)> = None;
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
         (None, Some(t)) => {
@@ -464,7 +466,9 @@ pub fn measure_decoded(
                 // Only the region and the search band around it are converted.
                 let crop = bbox_crop(&given, dec.width, dec.height, REFINE_SEARCH_PX + 8.0);
                 let grey = planes(dec, crop, &default_tone(dec.bits()).0, Channel::Luma);
-                refine_or_keep(&grey[0], given, target, &mut warnings)
+                let refined = refine_or_keep(&grey[0], given, target, &mut warnings);
+                seen = grey.into_iter().next().map(|p| (crop, p));
+                refined
             } else {
                 given
             }
@@ -499,10 +503,21 @@ pub fn measure_decoded(
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
     // Convert only what binning reads.
     let (crop, span) = read_set(&roi, target, opts.margin, dec.width, dec.height).map_err(err)?;
-    let (ps, preview) = rayon::join(
-        || planes_within(dec, crop, &tone, opts.channel, &span),
-        || make_preview(dec, &roi),
-    );
+    // The refinement's plane already holds these samples when the measurement
+    // wants default-tone luminance (or the photo is grey) inside its crop.
+    let same_samples = !opts.tone_chart
+        && opts.gamma.is_none()
+        && (opts.channel == Channel::Luma || dec.channels == 1);
+    let reuse = seen.filter(|(c, _)| {
+        same_samples && c.x0 <= crop.x0 && c.y0 <= crop.y0 && c.x1 >= crop.x1 && c.y1 >= crop.y1
+    });
+    let (ps, preview) = match reuse {
+        Some((_, plane)) => (vec![plane], make_preview(dec, &roi)),
+        None => rayon::join(
+            || planes_within(dec, crop, &tone, opts.channel, &span),
+            || make_preview(dec, &roi),
+        ),
+    };
     let names = plane_names(opts.channel, dec.channels);
     let groups: Vec<(&str, Vec<Plane>)> = names
         .into_iter()
