@@ -253,3 +253,63 @@ fn auto_uses_the_exif_f_number() {
     }
     assert!(n > 50, "{n}");
 }
+
+/// Sine patches get `mtf_model` too: the model along each patch's sine at its
+/// measured frequency, against the simulator's own patch truth (STEM.patches.csv).
+#[test]
+fn patch_model_matches_simulator_patch_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = dir.path().join("shot.png");
+    let target = concat!(env!("CARGO_MANIFEST_DIR"), "/targets/a4_patches.toml");
+    cmd()
+        .args(["simulate", "--target", target, "--system", SYSTEM])
+        .args(["--size", "1500x1100", "--rotate", "20", "-o"])
+        .arg(&photo)
+        .assert()
+        .success();
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("shot.json")).unwrap()).unwrap();
+    let roi: Vec<String> = meta["target_corners"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| format!("{}", v.as_f64().unwrap()))
+        .collect();
+    let out = dir.path().join("out");
+    cmd()
+        .arg("measure")
+        .arg(&photo)
+        .args([
+            "--target",
+            target,
+            "--roi",
+            &roi.join(","),
+            "--no-refine-roi",
+        ])
+        .args(["--pixel-pitch", "4.3um", "--model", SYSTEM, "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let truth: std::collections::HashMap<String, f64> =
+        csv::Reader::from_path(dir.path().join("shot.patches.csv"))
+            .unwrap()
+            .records()
+            .map(|r| {
+                let r = r.unwrap();
+                (r[0].to_string(), r[2].parse().unwrap())
+            })
+            .collect();
+    let mut r = csv::Reader::from_path(out.join("shot.mtf.csv")).unwrap();
+    let head = r.headers().unwrap().clone();
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
+    let (id, model) = (col("patch"), col("mtf_model"));
+    let mut n = 0;
+    for rec in r.records() {
+        let rec = rec.unwrap();
+        let want = truth[&rec[id]];
+        let got: f64 = rec[model].parse().unwrap();
+        assert!((got - want).abs() < 1e-3, "{}: {got} vs {want}", &rec[id]);
+        n += 1;
+    }
+    assert_eq!(n, truth.len());
+}

@@ -158,11 +158,11 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     let csv_path = out("mtf.csv");
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if m.curves.is_empty() {
-        files.push((csv_path.clone(), csv::patches_csv(&m)));
+        files.push((csv_path.clone(), extras.patches_csv(csv::patches_csv(&m))));
     } else {
         files.push((csv_path.clone(), extras.csv(csv::curves_csv(&m))));
         if !m.patches.is_empty() {
-            files.push((out("patches.csv"), csv::patches_csv(&m)));
+            files.push((out("patches.csv"), extras.patches_csv(csv::patches_csv(&m))));
         }
     }
     let plot_ext = match plot_format {

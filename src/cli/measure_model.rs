@@ -89,6 +89,8 @@ pub fn prepare(a: &ModelArgs, photo: &Path) -> Result<Prepared, CliError> {
 pub struct Extras {
     facts: ExifFacts,
     model: Option<(ModelOverlay, Vec<CurveModel>)>,
+    /// Model MTF of each sine patch (empty without a model).
+    patch_model: Vec<f64>,
     /// Extras for the MTF plot.
     pub plot: PlotExtras,
 }
@@ -111,9 +113,14 @@ impl Prepared {
             has_facts.then_some(&self.facts),
             m,
         );
+        let patch_model = model
+            .as_ref()
+            .map(|(o, _)| sweepmtf::measure::model_overlay::evaluate_patches(m, o))
+            .unwrap_or_default();
         Ok(Extras {
             facts: self.facts,
             model,
+            patch_model,
             plot,
         })
     }
@@ -125,6 +132,15 @@ impl Extras {
         match &self.model {
             Some((_, cms)) => add_mtf_model_column(&bytes, cms),
             None => bytes,
+        }
+    }
+
+    /// The sine-patch CSV with `mtf_model` added when a model is given.
+    pub fn patches_csv(&self, bytes: Vec<u8>) -> Vec<u8> {
+        if self.patch_model.is_empty() {
+            bytes
+        } else {
+            sweepmtf::report::model_overlay::add_model_values(&bytes, &self.patch_model)
         }
     }
 
@@ -150,6 +166,10 @@ impl Extras {
                 _ => "model MTF50 not reached".to_string(),
             })
             .collect();
-        format!(" | model {}: {}", o.name, parts.join("; "))
+        if parts.is_empty() {
+            format!(" | model {} (mtf_model per patch)", o.name)
+        } else {
+            format!(" | model {}: {}", o.name, parts.join("; "))
+        }
     }
 }

@@ -247,6 +247,29 @@ pub fn evaluate(m: &Measurement, model: &ModelOverlay) -> Vec<CurveModel> {
         .collect()
 }
 
+/// Model MTF at each sine patch's image frequency, along the patch's own sine
+/// direction in the image (from its binned region's corners), in patch order.
+pub fn evaluate_patches(m: &Measurement, model: &ModelOverlay) -> Vec<f64> {
+    m.patches
+        .iter()
+        .map(|p| {
+            // region_px: (0, t0), (l, t0), (l, t1), (0, t1) in the patch's strip frame.
+            let q = p.region_px;
+            let d = [
+                0.5 * (q[1][0] + q[2][0] - q[0][0] - q[3][0]),
+                0.5 * (q[1][1] + q[2][1] - q[0][1] - q[3][1]),
+            ];
+            let n = d[0].hypot(d[1]);
+            let dir = if n.is_finite() && n > 1e-9 {
+                [d[0] / n, d[1] / n]
+            } else {
+                [1.0, 0.0]
+            };
+            model.mtf_cy_px(dir, p.freq_cy_px)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -82,6 +82,12 @@ pub fn add_mtf_model_column(csv_bytes: &[u8], cms: &[CurveModel]) -> Vec<u8> {
         .iter()
         .flat_map(|c| c.mtf_model.iter().copied())
         .collect();
+    add_model_values(csv_bytes, &values)
+}
+
+/// Inserts an `mtf_model` column after `mtf` holding `values`, one per data row
+/// in order (the CSV is returned unchanged when the counts differ).
+pub fn add_model_values(csv_bytes: &[u8], values: &[f64]) -> Vec<u8> {
     let mut r = csv::ReaderBuilder::new()
         .has_headers(false)
         .from_reader(csv_bytes);
