@@ -436,18 +436,16 @@ impl Region<'_> {
         let m = &self.m;
         let inv_bin = 1.0 / self.bin;
         let last = self.nbins - 1;
-        for plane in self.planes {
+        for band in self.bands() {
+            let plane = self.planes[band.plane];
             let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
             let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
-            let j0 = ((self.ymin - oy) / sy).ceil().max(0.0) as usize;
-            let j1 =
-                (((self.ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
-            for j in j0..j1 {
-                let y = oy + j as f64 * sy;
-                let (i0, i1) = self.row_range(y, ox, sx, plane.width);
+            for (dj, &(i0, i1)) in band.rows.iter().enumerate() {
                 if i0 >= i1 {
                     continue;
                 }
+                let j = band.first + dj;
+                let y = oy + j as f64 * sy;
                 let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
                 let s_of = |i: usize| {
                     let x = ox + i as f64 * sx;
