@@ -7,31 +7,12 @@
 //! lattice's unaliased band.
 
 use assert_cmd::Command;
-use std::collections::HashMap;
 use std::path::Path;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
-    let mut r = csv::Reader::from_path(path).unwrap();
-    let head: Vec<String> = r.headers().unwrap().iter().map(str::to_string).collect();
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            head.iter()
-                .cloned()
-                .zip(rec.iter().map(str::to_string))
-                .collect()
-        })
-        .collect()
-}
-
-/// Linear interpolation in a (freq, mtf) table sorted by frequency.
-fn truth_at(truth: &[(f64, f64)], f: f64) -> f64 {
-    let i = truth.partition_point(|p| p.0 < f).clamp(1, truth.len() - 1);
-    let (a, b) = (truth[i - 1], truth[i]);
-    a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
-}
+mod csv_support;
+use csv_support::{read_csv, truth_at};
 
 /// Simulates `extra` settings into a DNG, measures its green sites with
 /// automatic location; returns (RMS |MTF − truth| of sweep `main`, points, summary JSON).

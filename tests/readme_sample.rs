@@ -8,26 +8,8 @@ use assert_cmd::Command;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-fn read_csv(path: &std::path::Path) -> Vec<std::collections::HashMap<String, String>> {
-    let mut r = csv::Reader::from_path(path).unwrap();
-    let head: Vec<String> = r.headers().unwrap().iter().map(str::to_string).collect();
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            head.iter()
-                .cloned()
-                .zip(rec.iter().map(str::to_string))
-                .collect()
-        })
-        .collect()
-}
-
-/// Linear interpolation of the truth curve at `f` (cycles/pixel).
-fn truth_at(truth: &[(f64, f64)], f: f64) -> f64 {
-    let i = truth.partition_point(|p| p.0 < f).clamp(1, truth.len() - 1);
-    let (a, b) = (truth[i - 1], truth[i]);
-    a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
-}
+mod csv_support;
+use csv_support::{read_csv, truth_at};
 
 #[test]
 fn main_command_measures_the_sample_without_corners() {
