@@ -27,7 +27,7 @@ use sweepmtf::measure::{MeasureOptions, measure_raw};
 use sweepmtf::model::System;
 use sweepmtf::photo::exif::read_facts;
 use sweepmtf::photo::linearise::Channel;
-use sweepmtf::photo::raw::{RawChannel, decode_raw};
+use sweepmtf::photo::raw::{RawChannel, decode_raw, decode_raw_with_rawler};
 use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
 use sweepmtf::simulate::{self, BayerOrder, Camera};
 use sweepmtf::target::SweepLaw;
@@ -107,6 +107,7 @@ fn small(c: &mut Criterion) {
 struct Big {
     plain: PathBuf,
     ljpeg: PathBuf,
+    tiles: PathBuf,
     strip: [[f64; 2]; 4],
     corners: [[f64; 2]; 4],
     target: sweepmtf::target::Target,
@@ -131,17 +132,27 @@ fn big_dngs(dir: &Path) -> Big {
     };
     let bytes = encode_mosaic(&shot.linear, 6000, 4000, BayerOrder::Rggb, 4.3, &settings).unwrap();
     std::fs::write(&ljpeg, bytes).unwrap();
+    let tiles = dir.join("big24_ljpeg_tiles.dng");
+    let settings = DngSettings {
+        lossless_jpeg: true,
+        tile_px: 256,
+        ..DngSettings::default()
+    };
+    let bytes = encode_mosaic(&shot.linear, 6000, 4000, BayerOrder::Rggb, 4.3, &settings).unwrap();
+    std::fs::write(&tiles, bytes).unwrap();
     let size = |p: &Path| std::fs::metadata(p).unwrap().len() as f64 / 1e6;
     eprintln!(
-        "24 MP DNGs rendered and written in {:.1} s (uncompressed {:.1} MB, lossless JPEG {:.1} MB)",
+        "24 MP DNGs rendered and written in {:.1} s (uncompressed {:.1} MB, lossless JPEG strips {:.1} MB, tiles {:.1} MB)",
         t.elapsed().as_secs_f64(),
         size(&plain),
-        size(&ljpeg)
+        size(&ljpeg),
+        size(&tiles)
     );
     let quad = |q: [f64; 8]| [[q[0], q[1]], [q[2], q[3]], [q[4], q[5]], [q[6], q[7]]];
     Big {
         plain,
         ljpeg,
+        tiles,
         strip: quad(shot.roi().unwrap()),
         corners: quad(shot.target_corners),
         target,
@@ -181,42 +192,37 @@ fn big(c: &mut Criterion) {
         big.corners
     );
     drop(frame);
-    let mut g = c.benchmark_group("24mp_dng");
-    g.sample_size(10);
-    g.bench_function("decode_only", |b| {
-        b.iter(|| black_box(decode_raw(black_box(&big.plain)).unwrap()))
-    });
-    g.bench_function("measure_g_strip_roi", |b| {
-        b.iter(|| black_box(measure_raw(&big.plain, "big", None, &strip_opts).unwrap()))
-    });
-    g.bench_function("measure_g_target_corners", |b| {
-        b.iter(|| {
-            black_box(measure_raw(&big.plain, "big", Some(&big.target), &target_opts).unwrap())
-        })
-    });
-    g.bench_function("measure_g_auto_location", |b| {
-        b.iter(|| black_box(measure_raw(&big.plain, "big", Some(&big.target), &auto_opts).unwrap()))
-    });
-    g.finish();
-    let mut g = c.benchmark_group("24mp_dng_ljpeg");
-    g.sample_size(10);
-    g.bench_function("decode_only", |b| {
-        b.iter(|| black_box(decode_raw(black_box(&big.ljpeg)).unwrap()))
-    });
-    g.bench_function("measure_g_strip_roi", |b| {
-        b.iter(|| black_box(measure_raw(&big.ljpeg, "big", None, &strip_opts).unwrap()))
-    });
-    g.bench_function("measure_g_target_corners", |b| {
-        b.iter(|| {
-            black_box(measure_raw(&big.ljpeg, "big", Some(&big.target), &target_opts).unwrap())
-        })
-    });
-    g.bench_function("measure_g_auto_location", |b| {
-        b.iter(|| black_box(measure_raw(&big.ljpeg, "big", Some(&big.target), &auto_opts).unwrap()))
-    });
-    g.finish();
+    for (group, path) in [
+        ("24mp_dng", &big.plain),
+        ("24mp_dng_ljpeg", &big.ljpeg),
+        ("24mp_dng_ljpeg_tiles", &big.tiles),
+    ] {
+        let mut g = c.benchmark_group(group);
+        g.sample_size(10);
+        g.bench_function("decode_only", |b| {
+            b.iter(|| black_box(decode_raw(black_box(path)).unwrap()))
+        });
+        g.bench_function("decode_only_rawler", |b| {
+            b.iter(|| black_box(decode_raw_with_rawler(black_box(path)).unwrap()))
+        });
+        g.bench_function("measure_g_strip_roi", |b| {
+            b.iter(|| black_box(measure_raw(path, "big", None, &strip_opts).unwrap()))
+        });
+        g.bench_function("measure_g_target_corners", |b| {
+            b.iter(|| black_box(measure_raw(path, "big", Some(&big.target), &target_opts).unwrap()))
+        });
+        g.bench_function("measure_g_auto_location", |b| {
+            b.iter(|| black_box(measure_raw(path, "big", Some(&big.target), &auto_opts).unwrap()))
+        });
+        g.finish();
+    }
     if keep.is_some() {
-        eprintln!("kept {} and {}", big.plain.display(), big.ljpeg.display());
+        eprintln!(
+            "kept {}, {} and {}",
+            big.plain.display(),
+            big.ljpeg.display(),
+            big.tiles.display()
+        );
     }
     drop(tmp);
 }

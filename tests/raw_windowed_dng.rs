@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 use sweepmtf::photo::raw::{
-    RawError, RawFrame, decode_raw, decode_raw_with_rawler, decode_raw_within,
+    RawError, RawFrame, decode_raw, decode_raw_with_rawler, decode_raw_within, read_raw_facts,
 };
 use sweepmtf::simulate::BayerOrder;
 use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
@@ -110,6 +110,11 @@ fn the_real_canon_dng_reads_windowed_as_rawler_reads_it() {
     let theirs = decode_raw_with_rawler(&p).unwrap();
     assert!(theirs.decoder.starts_with("rawler"), "{}", theirs.decoder);
     assert_same(&ours, &theirs, "Canon 550D");
+    assert_eq!(
+        read_raw_facts(&p).unwrap(),
+        theirs.facts,
+        "facts without decoding"
+    );
     assert_eq!(ours.decoded_rect(), (0, 0, ours.width, ours.height));
 }
 
@@ -124,7 +129,9 @@ fn simulated_dngs_of_every_layout_read_windowed_as_rawler_reads_them() {
             "{name}: {}",
             ours.decoder
         );
-        assert_same(&ours, &decode_raw_with_rawler(&p).unwrap(), name);
+        let theirs = decode_raw_with_rawler(&p).unwrap();
+        assert_same(&ours, &theirs, name);
+        assert_eq!(read_raw_facts(&p).unwrap(), theirs.facts, "{name}");
     }
 }
 

@@ -283,13 +283,19 @@ pub fn measure_raw(
     target: Option<&Target>,
     opts: &MeasureOptions,
 ) -> Result<Measurement, MeasureError> {
-    use crate::photo::raw::{RawChannel, decode_raw};
+    use crate::photo::raw::{RawChannel, decode_raw_within};
     let err = |failure: Failure| MeasureError {
         path: name.to_string(),
         failure,
     };
     check_options(opts).map_err(err)?;
-    let frame = decode_raw(path).map_err(|e| err(Failure::Raw(e.to_string())))?;
+    // With corners given, only what the region, its refinement search and its
+    // preview read is decoded (DNGs are read windowed; see `decode_raw_within`).
+    let want = opts.roi.map(|r| {
+        let c = raw_read_window(&r);
+        (c.x0, c.y0, c.x1, c.y1)
+    });
+    let frame = decode_raw_within(path, want).map_err(|e| err(Failure::Raw(e.to_string())))?;
     let mut warnings = Vec::new();
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
@@ -304,7 +310,10 @@ pub fn measure_raw(
         _ => {
             let given = resolve_roi(opts, frame.width, frame.height).map_err(err)?;
             if opts.refine_roi {
-                refine_or_keep(&frame.location_plane(), given, target, &mut warnings)
+                // Only the region and the search band around it are converted.
+                let c = bbox_crop(&given, frame.width, frame.height, REFINE_SEARCH_PX + 8.0);
+                let plane = frame.location_plane_within((c.x0, c.y0, c.x1, c.y1));
+                refine_or_keep(&plane, given, target, &mut warnings)
             } else {
                 given
             }
@@ -373,6 +382,28 @@ pub fn measure_raw(
     warnings.append(&mut m.warnings);
     m.warnings = warnings;
     Ok(m)
+}
+
+/// The image rectangle a raw measurement with the corners `roi` reads (frame
+/// pixels, unclamped): the corners' bounding box padded by the refinement's
+/// reach (moves of up to √2·search + 2 px plus a strip's inward trim, and the
+/// search band around the moved edges) and by the preview's context (as in
+/// [`preview_from`], from the corners as refined, so with some slack).
+fn raw_read_window(roi: &[Point; 4]) -> Crop {
+    let xmin = roi.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
+    let xmax = roi.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max);
+    let ymin = roi.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+    let ymax = roi.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max);
+    let reach = 4.0 * REFINE_SEARCH_PX + 16.0;
+    let pad = 0.08 * ((xmax - xmin).max(ymax - ymin) + 2.0 * reach) + 8.0 + reach;
+    let lo = |v: f64| (v - pad).floor().max(0.0) as usize;
+    let hi = |v: f64| (v + pad).ceil().clamp(0.0, usize::MAX as f64) as usize;
+    Crop {
+        x0: lo(xmin),
+        y0: lo(ymin),
+        x1: hi(xmax),
+        y1: hi(ymax),
+    }
 }
 
 /// The given corners refined to the edges seen in `plane`, or as given (with

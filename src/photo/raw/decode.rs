@@ -214,6 +214,11 @@ pub(super) fn tiff_exif_of_file(path: &Path) -> Option<ExifFacts> {
 
 /// Reads the EXIF facts of a raw file without decoding its image data.
 pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
+    if is_dng_path(path)
+        && let Some(facts) = super::dng::read_dng_facts(path)?
+    {
+        return Ok(facts);
+    }
     let src = match open(path) {
         Ok(src) => src,
         Err(RawError::Corrupt { cause, .. }) => {
@@ -258,11 +263,7 @@ pub fn decode_raw_within(
     path: &Path,
     want: Option<(usize, usize, usize, usize)>,
 ) -> Result<RawFrame, RawError> {
-    let is_dng = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("dng"));
-    if !is_dng {
+    if !is_dng_path(path) {
         return decode_raw_with_rawler(path);
     }
     match super::dng::read_dng(path, want)? {
@@ -276,6 +277,12 @@ pub fn decode_raw_within(
             Ok(f)
         }
     }
+}
+
+fn is_dng_path(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("dng"))
 }
 
 /// The raw decoder crate and its pinned version.

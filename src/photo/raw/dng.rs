@@ -18,7 +18,7 @@
 use super::decode::{Deltas, RawError, facts_of, tiff_exif_of_file};
 use super::frame::{BlackLevels, CfaColour, CfaPattern, Ids, Layout, RawFrame, Samples};
 use super::guard;
-use crate::photo::exif::clean_text;
+use crate::photo::exif::{ExifFacts, clean_text};
 use rawler::decompressors::Decompressor;
 use rawler::decompressors::ljpeg::LJpegDecompressor;
 use rawler::decompressors::packed::PackedDecompressor;
@@ -142,6 +142,24 @@ fn bytes(ifd: &IFD, tag: impl rawler::tags::TiffTag) -> Option<Vec<u8>> {
 /// it when `None`; clamped to the frame). Other pixels of the frame hold 0
 /// and are never read (see [`RawFrame::decoded_rect`]).
 pub(crate) fn read_dng(path: &Path, want: Option<FrameRect>) -> Result<Dng, RawError> {
+    let Some((file, len, tiff)) = open_dng(path)? else {
+        return Ok(Dng::Rawler("not a DNG this reader parses".into()));
+    };
+    let source = Source {
+        file: Mutex::new(file),
+        len,
+    };
+    let outcome = guard::contain(|| frame_of(path, &tiff, &source, want));
+    match outcome {
+        Ok(r) => r,
+        Err(p) => Ok(Dng::Rawler(format!("windowed reader failed: {p}"))),
+    }
+}
+
+/// Opens the file and parses its TIFF structure through a reader: the file,
+/// its length and the IFDs, or `None` when it is not a TIFF-based DNG (or
+/// its structure does not parse; rawler then gives its verdict).
+fn open_dng(path: &Path) -> Result<Option<(File, u64, GenericTiffReader)>, RawError> {
     let io = |e: std::io::Error| RawError::Io {
         path: path.display().to_string(),
         cause: e.to_string(),
@@ -152,33 +170,51 @@ pub(crate) fn read_dng(path: &Path, want: Option<FrameRect>) -> Result<Dng, RawE
     {
         let mut f = &file;
         if len < 8 || f.read_exact(&mut head).is_err() {
-            return Ok(Dng::Rawler("too short for a TIFF header".into()));
+            return Ok(None);
         }
         f.seek(SeekFrom::Start(0)).map_err(io)?;
     }
     if head != *b"II*\0" && head != *b"MM\0*" {
-        return Ok(Dng::Rawler("not a TIFF-based file".into()));
+        return Ok(None);
     }
     let tiff = {
         let mut reader = BufReader::with_capacity(64 << 10, &file);
         match guard::contain(|| GenericTiffReader::new(&mut reader, 0, 0, None, &[])) {
             Ok(Ok(t)) => t,
-            Ok(Err(e)) => return Ok(Dng::Rawler(format!("TIFF structure: {e}"))),
-            Err(p) => return Ok(Dng::Rawler(format!("TIFF structure: {p}"))),
+            Ok(Err(_)) | Err(_) => return Ok(None),
         }
     };
     if !tiff.root_ifd().has_entry(DngTag::DNGVersion) {
-        return Ok(Dng::Rawler("no DNGVersion tag".into()));
+        return Ok(None);
     }
-    let source = Source {
-        file: Mutex::new(file),
-        len,
+    Ok(Some((file, len, tiff)))
+}
+
+/// The EXIF facts of a DNG (TIFF EXIF from the file's head, make and model
+/// from IFD 0) and its make and model, without rawler.
+fn facts_and_names(path: &Path, tiff: &GenericTiffReader) -> (ExifFacts, String, String) {
+    let mut facts = facts_of(None, tiff_exif_of_file(path), "", "");
+    let root = tiff.root_ifd();
+    let text = |tag| {
+        root.get_entry(tag)
+            .and_then(|e| e.value.as_string().cloned())
+            .and_then(|s| clean_text(&s))
+            .unwrap_or_default()
     };
-    let outcome = guard::contain(|| frame_of(path, &tiff, &source, want));
-    match outcome {
-        Ok(r) => r,
-        Err(p) => Ok(Dng::Rawler(format!("windowed reader failed: {p}"))),
+    let (make, model) = (text(TiffCommonTag::Make), text(TiffCommonTag::Model));
+    if facts.make.is_none() && !make.is_empty() {
+        facts.make = Some(make.clone());
     }
+    if facts.model.is_none() && !model.is_empty() {
+        facts.model = Some(model.clone());
+    }
+    (facts, make, model)
+}
+
+/// The EXIF facts of a DNG read without rawler (see [`facts_and_names`]), or
+/// `None` when the file is not a DNG this reader parses.
+pub(crate) fn read_dng_facts(path: &Path) -> Result<Option<ExifFacts>, RawError> {
+    Ok(open_dng(path)?.map(|(_, _, tiff)| facts_and_names(path, &tiff).0))
 }
 
 /// The raw IFD rawler decodes: the first full-resolution IFD with a supported compression.
@@ -314,7 +350,7 @@ fn frame_of(
     } else {
         BlackLevels::reanchored(levels, bcols, brows, spp, (ax, ay), (fx, fy))
     };
-    let mut facts = facts_of(None, tiff_exif_of_file(path), "", "");
+    let (mut facts, make, model) = facts_and_names(path, tiff);
     let deltas = Deltas {
         h: f64s(raw, DngTag::BlackLevelDeltaH).unwrap_or_default(),
         v: f64s(raw, DngTag::BlackLevelDeltaV).unwrap_or_default(),
@@ -330,21 +366,6 @@ fn frame_of(
         Some(w) if !w.is_empty() => vec![w[0]; spp],
         _ => vec![((1u64 << bits) - 1) as f64; spp],
     };
-    let root = tiff.root_ifd();
-    let text = |tag| {
-        root.get_entry(tag)
-            .and_then(|e| e.value.as_string().cloned())
-            .and_then(|s| clean_text(&s))
-            .unwrap_or_default()
-    };
-    let (make, model) = (text(TiffCommonTag::Make), text(TiffCommonTag::Model));
-    if facts.make.is_none() && !make.is_empty() {
-        facts.make = Some(make.clone());
-    }
-    if facts.model.is_none() && !model.is_empty() {
-        facts.model = Some(model.clone());
-    }
-
     // The units (tiles or strips) and the wanted rectangle in image pixels.
     let tiled = raw.has_entry(TiffCommonTag::TileOffsets);
     let units = if tiled {
@@ -460,6 +481,9 @@ fn unit_table(
     }
 }
 
+/// Rows of an uncompressed unit decoded per task.
+const PACKED_ROWS: usize = 64;
+
 /// One windowed decode: which units to read and where their pixels go.
 struct Job<'a> {
     codec: Codec,
@@ -483,13 +507,20 @@ impl Job<'_> {
         let (_, fy, fw) = self.frame;
         let (x0, y0, x1, y1) = self.want;
         let row_len = fw * self.spp;
-        // Frame rows y0..y1 split at unit-row boundaries, each band with its slice.
+        // Frame rows y0..y1 split at unit-row boundaries, each band with its
+        // slice; uncompressed units (which can start at any row) also every
+        // PACKED_ROWS rows, so that one big strip still decodes in parallel
+        // through a small buffer.
+        let step = match self.codec {
+            Codec::Packed => PACKED_ROWS,
+            Codec::Ljpeg => u.h,
+        };
         let mut bands = Vec::new();
         let mut rest = &mut out[(y0 - fy) * row_len..(y1 - fy) * row_len];
         let mut y = y0;
         while y < y1 {
             let band = y / u.h;
-            let end = ((band + 1) * u.h).min(y1);
+            let end = ((band + 1) * u.h).min((y / step + 1) * step).min(y1);
             let (head, tail) = rest.split_at_mut((end - y) * row_len);
             bands.push((band, y, end, head));
             rest = tail;

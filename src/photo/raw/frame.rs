@@ -622,7 +622,13 @@ impl RawFrame {
     /// on other mosaics every site (colours unbalanced); on linear RGB the G
     /// samples; on a monochrome raw its one plane.
     pub fn location_plane(&self) -> Plane {
-        let all = (0, 0, self.width, self.height);
+        self.location_plane_within((0, 0, self.width, self.height))
+    }
+
+    /// [`RawFrame::location_plane`] over the frame rectangle `rect` = (x0, y0,
+    /// x1, y1) only (pixels, end exclusive), e.g. around given corners.
+    pub fn location_plane_within(&self, rect: (usize, usize, usize, usize)) -> Plane {
+        let all = rect;
         let span = |_| (0, self.width);
         match (&self.cfa, self.samples_per_pixel) {
             (Some(cfa), _) if cfa.size() == (2, 2) => {

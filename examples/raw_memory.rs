@@ -1,0 +1,83 @@
+//! Peak memory and time of one raw measurement in a fresh process (criterion
+//! keeps every case in one process, so its peaks mix): run once per case on
+//! the 24 MP DNGs that `cargo bench --bench raw` keeps with
+//! `SWEEPMTF_BENCH_DNG_DIR=folder`.
+//!
+//! `cargo run --release --example raw_memory -- FILE.dng MODE`, MODE one of
+//! `decode` (our decoder, whole frame), `rawler` (rawler's whole decode),
+//! `strip` (`--roi` on the demo target's sweep strip), `corners` (`--roi` =
+//! the target frame's corners, with the target) or `auto` (chart found from
+//! the fiducials). Prints the process's peak RSS (VmHWM) and the wall time.
+
+use std::path::PathBuf;
+use std::time::Instant;
+use sweepmtf::measure::{MeasureOptions, measure_raw};
+use sweepmtf::photo::linearise::Channel;
+use sweepmtf::photo::raw::{decode_raw, decode_raw_with_rawler};
+use sweepmtf::simulate::demo::demo_target;
+use sweepmtf::target::SweepLaw;
+
+fn peak_rss_mb() -> f64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    status
+        .lines()
+        .find(|l| l.starts_with("VmHWM:"))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|v| v.parse::<f64>().ok())
+        .map_or(f64::NAN, |kib| kib * 1024.0 / 1e6)
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let (Some(file), Some(mode)) = (args.next(), args.next()) else {
+        eprintln!("usage: raw_memory FILE.dng decode|rawler|strip|corners|auto");
+        std::process::exit(2);
+    };
+    let path = PathBuf::from(file);
+    let target = demo_target(SweepLaw::Log);
+    // The demo target's strip and frame on the bench's 6000×4000 shot (px).
+    let strip = [
+        [1000.0, 1000.0],
+        [5000.0, 1000.0],
+        [5000.0, 2000.0],
+        [1000.0, 2000.0],
+    ];
+    let corners = [
+        [600.0, 400.0],
+        [5400.0, 400.0],
+        [5400.0, 3600.0],
+        [600.0, 3600.0],
+    ];
+    let opts = |roi| MeasureOptions {
+        roi,
+        channel: Channel::G,
+        ..MeasureOptions::default()
+    };
+    let t = Instant::now();
+    let what = match mode.as_str() {
+        "decode" => decode_raw(&path)
+            .map(|f| f.decoder)
+            .map_err(|e| e.to_string()),
+        "rawler" => decode_raw_with_rawler(&path)
+            .map(|f| f.decoder)
+            .map_err(|e| e.to_string()),
+        "strip" => measure_raw(&path, "shot", None, &opts(Some(strip)))
+            .map(|m| format!("{} curves", m.curves.len()))
+            .map_err(|e| e.to_string()),
+        "corners" => measure_raw(&path, "shot", Some(&target), &opts(Some(corners)))
+            .map(|m| format!("{} curves", m.curves.len()))
+            .map_err(|e| e.to_string()),
+        "auto" => measure_raw(&path, "shot", Some(&target), &opts(None))
+            .map(|m| format!("{} curves", m.curves.len()))
+            .map_err(|e| e.to_string()),
+        other => Err(format!("unknown mode {other}")),
+    };
+    let ms = t.elapsed().as_secs_f64() * 1e3;
+    match what {
+        Ok(w) => println!("{mode}: {ms:.1} ms, peak RSS {:.1} MB ({w})", peak_rss_mb()),
+        Err(e) => {
+            eprintln!("{e}");
+            std::process::exit(1);
+        }
+    }
+}
