@@ -1,6 +1,7 @@
 //! The MTF plot: each curve with its ±1σ error band, aliased points in grey,
 //! the Nyquist frequency and MTF50 marked; sine patches as points with error
-//! bars. PNG or SVG.
+//! bars; with a model, dashed model curves and a hollow ring at each patch's
+//! model value. PNG or SVG.
 
 use super::atomic::ReportError;
 use super::model_overlay::PlotExtras;
@@ -221,7 +222,15 @@ where
             .map_err(err)?
             .label("sine patches")
             .legend(move |(x, y)| Circle::new((x + 9, y), 4, col.filled()));
+        if !aliased_in_legend && m.patches.iter().any(|p| p.aliased) {
+            chart
+                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+                .map_err(err)?
+                .label("aliased (not MTF)")
+                .legend(|(x, y)| Circle::new((x + 9, y), 4, RGBColor(160, 160, 160).filled()));
+        }
     }
+    super::model_overlay::draw_patch_marks(&mut chart, extras, xmax, ymax).map_err(err)?;
     chart
         .configure_series_labels()
         .label_font((crate::plot::FONT, 15))
