@@ -199,8 +199,14 @@ where
     super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     if !m.patches.is_empty() {
         let col = RGBColor(230, 120, 20);
+        // Patches beyond the axis (aliased, far above Nyquist) are left off rather than pinned to its edge.
+        let shown: Vec<_> = m
+            .patches
+            .iter()
+            .filter(|p| p.freq_cy_px.is_finite() && p.freq_cy_px <= xmax && p.mtf.is_finite())
+            .collect();
         chart
-            .draw_series(m.patches.iter().map(|p| {
+            .draw_series(shown.iter().map(|p| {
                 PathElement::new(
                     [
                         (p.freq_cy_px, (p.mtf - p.mtf_err).max(0.0)),
@@ -211,7 +217,7 @@ where
             }))
             .map_err(err)?;
         chart
-            .draw_series(m.patches.iter().map(|p| {
+            .draw_series(shown.iter().map(|p| {
                 let c = if p.aliased {
                     RGBColor(160, 160, 160)
                 } else {
