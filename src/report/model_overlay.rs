@@ -88,6 +88,12 @@ pub fn plot_extras(
         if let Some(r) = cm.mtf50_ratio {
             t.push_str(&format!(", measured/model {r:.3}"));
         }
+        if let Some(c) = &patch_cmp {
+            t.push_str(&format!(
+                "; patches measured/model median {:.3}",
+                c.median_ratio
+            ));
+        }
         caption.push(t);
     } else if m.curves.is_empty()
         && let Some(c) = &patch_cmp
