@@ -310,3 +310,94 @@ fn model_beyond_cutoff_draws_rings_at_zero_and_leaves_those_patches_out() {
     assert!(c["median"].as_f64().unwrap().is_finite());
     assert!(line.contains(&format!("({left_out} left out)")), "{line}");
 }
+
+/// The real sineMTF scan's folder: `../shared` beside the checkout or two levels up (a worktree).
+fn scan_dir() -> PathBuf {
+    let beside = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/realdata"));
+    let above = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/realdata"
+    ));
+    if beside.exists() { beside } else { above }.join("sine_target_scan")
+}
+
+/// The real sineMTF scan (patch-only, 50.7 µm at ≈501 ppi) with a scanner
+/// model (50.7 µm square pixel × Gaussian σ 20 µm): the plot's rings sit at the
+/// CSV's model values, which match the closed form sinc(p·u)·exp(−2π²σ²u²)
+/// (u = f/p; the scan's skew is under 1°, so the v-factor differs from 1 by
+/// < 1e-4); patches 14 and 15 (above the 9.9 cy/mm Nyquist) are the 2 left out.
+#[test]
+fn real_scan_with_a_scanner_model() {
+    let photo = scan_dir().join("mitre_sinemtf_test.tif");
+    if !photo.exists() {
+        eprintln!("skipped: {} not found", photo.display());
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sys = dir.path().join("scanner.toml");
+    std::fs::write(
+        &sys,
+        "name = \"scanner\"\n[[factor]]\nkind = \"aperture\"\nspec = \"rect:A=50.7um,B=50.7um\"\n\
+         [[factor]]\nkind = \"gaussian\"\nspec = \"sigma=20um\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let a = cmd()
+        .arg("measure")
+        .arg(&photo)
+        .arg("--target")
+        .arg(scan_dir().join("mitre_sinemtf_tgt.txt"))
+        .args([
+            "--tone",
+            "chart",
+            "--pixel-pitch",
+            "50.7um",
+            "--plot",
+            "svg",
+        ])
+        .args([
+            "--roi",
+            "1412.75,957.16,32.33,961.36,34.26,24.87,1414.68,20.68",
+            "--model",
+        ])
+        .arg(&sys)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success();
+    let line = String::from_utf8_lossy(&a.get_output().stdout).into_owned();
+    let rows = rows(&out.join("mitre_sinemtf_test.mtf.csv"));
+    assert_eq!(rows.len(), 15);
+    let pi = std::f64::consts::PI;
+    let (p, sigma) = (0.0507, 0.020);
+    for r in &rows {
+        let u = r.0 / p;
+        let x = pi * p * u;
+        let want = (x.sin() / x).abs() * (-2.0 * pi * pi * sigma * sigma * u * u).exp();
+        assert!(
+            (r.2 - want).abs() < 2e-4,
+            "{} cy/px: {} vs {want}",
+            r.0,
+            r.2
+        );
+    }
+    assert_eq!(
+        rows.iter().map(|r| r.3).collect::<Vec<_>>(),
+        [vec![false; 13], vec![true; 2]].concat()
+    );
+    // All 15 patches lie inside the axis here, so every patch has its ring.
+    let svg = std::fs::read_to_string(out.join("mitre_sinemtf_test.mtf.svg")).unwrap();
+    let cs = circles(&svg);
+    let rings: Vec<&Circle> = cs.iter().filter(|c| c.fill == "none").collect();
+    assert_eq!(rings.len(), 16, "15 patches + legend");
+    assert_eq!(
+        rings.iter().filter(|c| c.stroke == "#A0A0A0").count(),
+        2,
+        "the two aliased patches"
+    );
+    let (med, n) = median_ratio(&rows);
+    assert_eq!(n, 13);
+    let got = number_after(&line, "patches measured/model median ");
+    assert!((got - med).abs() <= 1.5e-3, "{got} vs {med}: {line}");
+    assert!(line.contains("(2 left out)"), "{line}");
+}
