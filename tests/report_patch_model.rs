@@ -401,3 +401,94 @@ fn real_scan_with_a_scanner_model() {
     assert!((got - med).abs() <= 1.5e-3, "{got} vs {med}: {line}");
     assert!(line.contains("(2 left out)"), "{line}");
 }
+
+/// A target with a sweep (sines along x) and sine patches along x and along y.
+fn mixed_target() -> String {
+    let mut s = String::from(
+        "name = \"sweep and patches\"\nwidth_mm = 240.0\nheight_mm = 160.0\nbackground = 1.0\n\
+         greys = []\nfiducials = []\n\n[[sweeps]]\nid = \"main\"\nx_mm = 10.0\ny_mm = 15.0\n\
+         width_mm = 220.0\nheight_mm = 30.0\ndirection = \"x\"\nlaw = \"log\"\n\
+         f_min_cy_mm = 0.1\nf_max_cy_mm = 2.5\nmean = 0.5\ncontrast = 0.8\n\n",
+    );
+    for (y, d) in [(60.0, "x"), (105.0, "y")] {
+        for (i, f) in [0.3, 0.6, 1.0, 1.6].iter().enumerate() {
+            s.push_str(&format!(
+                "[[patches]]\nid = \"{d}{i}\"\nx_mm = {}\ny_mm = {y}\nwidth_mm = 50.0\n\
+                 height_mm = 35.0\ndirection = \"{d}\"\nfreq_cy_mm = {f}\nmean = 0.5\n\
+                 contrast = 0.8\n\n",
+                10.0 + 56.0 * i as f64
+            ));
+        }
+    }
+    s
+}
+
+/// Sweep and patches on one plot, turned 10°: the sweep's dashed model curve
+/// stays; the y patches get a second curve only when the model differs along
+/// their sines (the L-shaped phone pixel is anisotropic; a square pixel behind
+/// diffraction is the same along 10° and 100°); every patch has its ring, and
+/// the line gives both the MTF50 ratio and the patch median.
+#[test]
+fn sweep_and_patches_on_one_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("mixed.toml");
+    std::fs::write(&target, mixed_target()).unwrap();
+    for (sys, pitch, second_curve) in [
+        ("phone_cmos_f2", "1.4um", true),
+        ("aps_c_f4", "4.3um", false),
+    ] {
+        let system = format!("{}/targets/systems/{sys}.toml", env!("CARGO_MANIFEST_DIR"));
+        let photo = dir.path().join(format!("{sys}.png"));
+        cmd()
+            .args(["simulate", "--target"])
+            .arg(&target)
+            .args([
+                "--system", &system, "--size", "1200x800", "--rotate", "10", "-o",
+            ])
+            .arg(&photo)
+            .assert()
+            .success();
+        let meta: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join(format!("{sys}.json"))).unwrap())
+                .unwrap();
+        let roi: Vec<String> = meta["target_corners"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| format!("{}", v.as_f64().unwrap()))
+            .collect();
+        let out = dir.path().join(format!("out_{sys}"));
+        let a = cmd()
+            .arg("measure")
+            .arg(&photo)
+            .arg("--target")
+            .arg(&target)
+            .args([
+                "--roi",
+                &roi.join(","),
+                "--no-refine-roi",
+                "--pixel-pitch",
+                pitch,
+            ])
+            .args(["--model", &system, "--plot", "svg", "-o"])
+            .arg(&out)
+            .assert()
+            .success();
+        let line = String::from_utf8_lossy(&a.get_output().stdout).into_owned();
+        assert!(line.contains(", measured/model "), "{line}");
+        assert!(line.contains("patches measured/model median "), "{line}");
+        let svg = std::fs::read_to_string(out.join(format!("{sys}.mtf.svg"))).unwrap();
+        let rings = circles(&svg)
+            .into_iter()
+            .filter(|c| c.fill == "none")
+            .count();
+        assert_eq!(rings, 8 + 1, "{sys}: 8 patches + legend");
+        assert!(svg.contains("model: "), "{sys}");
+        assert_eq!(
+            svg.contains("model along patches at 100°"),
+            second_curve,
+            "{sys}"
+        );
+        assert!(!svg.contains("NaN"), "{sys}");
+    }
+}
