@@ -6,10 +6,14 @@
 //! become errors for that file.
 
 mod decode;
+mod dng;
 mod frame;
 mod guard;
 mod ljpeg;
 
-pub use decode::{RAW_EXTENSIONS, RawError, decode_raw, is_raw_path, read_raw_facts};
+pub use decode::{
+    RAW_EXTENSIONS, RawError, decode_raw, decode_raw_with_rawler, decode_raw_within, is_raw_path,
+    read_raw_facts,
+};
 pub use frame::{BlackLevels, CfaColour, CfaPattern, RawChannel, RawFrame};
 pub use ljpeg::lossless_jpeg_cfa_tile;

@@ -185,6 +185,10 @@ pub struct DngSettings {
     /// Store the mosaic as lossless-JPEG strips of 16 rows (DNG compression 7)
     /// instead of one uncompressed strip; needs an even sensor width.
     pub lossless_jpeg: bool,
+    /// With `lossless_jpeg`: square tiles of this many pixels (a multiple of
+    /// 16, as DNG asks; edge tiles padded by repeating the last column and
+    /// row) instead of strips of 16 rows; 0 = strips.
+    pub tile_px: usize,
     /// Make (TIFF tag 271).
     pub make: String,
     /// Model (TIFF tag 272); UniqueCameraModel is "make model".
@@ -201,6 +205,7 @@ impl Default for DngSettings {
             black_delta_h: Vec::new(),
             black_delta_v: Vec::new(),
             lossless_jpeg: false,
+            tile_px: 0,
             make: "sweepmtf".to_string(),
             model: "simulated".to_string(),
         }
@@ -342,6 +347,32 @@ pub fn encode_mosaic(
     const ROWS: usize = 16;
     tags.retain(|(t, _)| *t != 259);
     tags.push((259, TagValue::Short(vec![7])));
+    if s.tile_px > 0 {
+        let t = s.tile_px;
+        if !t.is_multiple_of(16) {
+            return bad(format!("DNG: tiles of {t} px are not a multiple of 16"));
+        }
+        tags.push((322, TagValue::Long(vec![t as u32])));
+        tags.push((323, TagValue::Long(vec![t as u32])));
+        let (across, down) = (fw.div_ceil(t), fh.div_ceil(t));
+        let tiles: Result<Vec<Vec<u8>>, String> = (0..across * down)
+            .into_par_iter()
+            .map(|i| {
+                let (x0, y0) = ((i % across) * t, (i / across) * t);
+                let tile: Vec<u16> = (0..t * t)
+                    .map(|k| {
+                        let x = (x0 + k % t).min(fw - 1);
+                        let y = (y0 + k / t).min(fh - 1);
+                        dns[y * fw + x]
+                    })
+                    .collect();
+                crate::photo::raw::lossless_jpeg_cfa_tile(&tile, t, t)
+            })
+            .collect();
+        let tiles = tiles.map_err(|e| SimError::Encode(format!("DNG lossless JPEG: {e}")))?;
+        let chunks: Vec<&[u8]> = tiles.iter().map(Vec::as_slice).collect();
+        return Ok(tiff_with_chunks(&tags, &exif, &chunks, (324, 325)));
+    }
     tags.push((278, TagValue::Long(vec![ROWS as u32])));
     let strips: Result<Vec<Vec<u8>>, String> = dns
         .par_chunks(ROWS * fw)

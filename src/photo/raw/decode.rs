@@ -132,7 +132,7 @@ fn map_error(path: &Path, e: RawlerError, facts: &ExifFacts) -> RawError {
 }
 
 /// Facts from rawler's metadata, filled in from the TIFF EXIF where kamadak-exif can read it.
-fn facts_of(
+pub(super) fn facts_of(
     meta: Option<&RawMetadata>,
     tiff: Option<ExifFacts>,
     make: &str,
@@ -197,6 +197,21 @@ fn tiff_exif(buf: &[u8]) -> Option<ExifFacts> {
     read(buf)
 }
 
+/// The TIFF EXIF facts from the first [`EXIF_HEAD_BYTES`] of the file at
+/// `path` (read, not mapped), or `None` when they are not there.
+pub(super) fn tiff_exif_of_file(path: &Path) -> Option<ExifFacts> {
+    use std::io::Read;
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(EXIF_HEAD_BYTES as u64)
+        .read_to_end(&mut head)
+        .ok()?;
+    guard::contain(|| try_facts_from_bytes(&head))
+        .ok()
+        .flatten()
+}
+
 /// Reads the EXIF facts of a raw file without decoding its image data.
 pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
     let src = match open(path) {
@@ -230,6 +245,45 @@ pub fn read_raw_facts(path: &Path) -> Result<ExifFacts, RawError> {
 /// Decodes a camera raw into linear sensor data cropped to its active area,
 /// with its EXIF facts. No demosaicing and no colour processing.
 pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
+    decode_raw_within(path, None)
+}
+
+/// Like [`decode_raw`], but only the frame rectangle `want` = (x0, y0, x1,
+/// y1) (frame pixels, end exclusive; `None` = all) needs to be decoded. The
+/// common DNGs (uncompressed or lossless JPEG, strips or tiles) are read by
+/// our windowed reader, which reads and decodes only the strips or tiles
+/// meeting `want` (the rest of the frame reads as 0 DN, see
+/// [`RawFrame::decoded_rect`]); other files are decoded whole by rawler.
+pub fn decode_raw_within(
+    path: &Path,
+    want: Option<(usize, usize, usize, usize)>,
+) -> Result<RawFrame, RawError> {
+    let is_dng = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("dng"));
+    if !is_dng {
+        return decode_raw_with_rawler(path);
+    }
+    match super::dng::read_dng(path, want)? {
+        super::dng::Dng::Frame(mut f) => {
+            f.decoder = "sweepmtf windowed DNG reader".to_string();
+            Ok(*f)
+        }
+        super::dng::Dng::Rawler(why) => {
+            let mut f = decode_raw_with_rawler(path)?;
+            f.decoder = format!("{RAWLER} (not read windowed: {why})");
+            Ok(f)
+        }
+    }
+}
+
+/// The raw decoder crate and its pinned version.
+const RAWLER: &str = "rawler 0.8.0";
+
+/// Decodes a camera raw whole through rawler (every format rawler reads);
+/// [`decode_raw`] uses it for the files the windowed DNG reader does not handle.
+pub fn decode_raw_with_rawler(path: &Path) -> Result<RawFrame, RawError> {
     let src = open(path)?;
     // The TIFF EXIF copy is read and freed before the image buffer exists,
     // so the two never add up in the peak memory.
@@ -262,7 +316,11 @@ pub fn decode_raw(path: &Path) -> Result<RawFrame, RawError> {
     let facts = facts_of(meta.as_ref(), tiff, &image.make, &image.model);
     drop(src);
     let path_text = path.display().to_string();
-    frame_from_image(image, format, facts, deltas).map_err(|e| match e {
+    let frame = frame_from_image(image, format, facts, deltas).map(|mut f| {
+        f.decoder = RAWLER.to_string();
+        f
+    });
+    frame.map_err(|e| match e {
         Refusal::Unsupported { make, model, what } => RawError::Unsupported {
             path: path_text,
             make,
@@ -309,9 +367,55 @@ fn frame_rect(image: &RawImage) -> (usize, usize, usize, usize) {
 /// DNG BlackLevelDeltaH (per active-area column) and BlackLevelDeltaV (per
 /// active-area row), in DN; rawler 0.8.0 does not apply them.
 #[derive(Debug, Default)]
-struct Deltas {
-    h: Vec<f64>,
-    v: Vec<f64>,
+pub(super) struct Deltas {
+    /// Per active-area column (DN).
+    pub h: Vec<f64>,
+    /// Per active-area row (DN).
+    pub v: Vec<f64>,
+}
+
+impl Deltas {
+    /// Puts the deltas of the frame `(x0, y0, w, h)` (decoded-buffer pixels)
+    /// into `black`; `active` = (x, y, w, h) is the active area the deltas
+    /// run over. Deltas of the wrong length are ignored with a warning.
+    pub(super) fn apply(
+        &self,
+        black: &mut BlackLevels,
+        (x0, y0, w, h): (usize, usize, usize, usize),
+        (ax, ay, aw, ah): (usize, usize, usize, usize),
+        warnings: &mut Vec<String>,
+    ) {
+        for (name, d, start, len, full, out) in [
+            (
+                "BlackLevelDeltaH",
+                &self.h,
+                x0 - ax.min(x0),
+                w,
+                aw,
+                &mut black.delta_h,
+            ),
+            (
+                "BlackLevelDeltaV",
+                &self.v,
+                y0 - ay.min(y0),
+                h,
+                ah,
+                &mut black.delta_v,
+            ),
+        ] {
+            if d.is_empty() {
+                continue;
+            }
+            if d.len() == full && start + len <= full && d.iter().all(|v| v.is_finite()) {
+                *out = d[start..start + len].to_vec();
+            } else {
+                warnings.push(format!(
+                    "{name} has {} values for an active area {full} px across (or unreadable values): ignored",
+                    d.len()
+                ));
+            }
+        }
+    }
 }
 
 /// Reads BlackLevelDeltaH/V (tags 50715/50716) of the raw IFD rawler decodes
@@ -416,36 +520,12 @@ fn frame_from_image(
         .as_ref()
         .map(|r| (r.p.x, r.p.y, r.d.w, r.d.h))
         .unwrap_or((0, 0, image.width, image.height));
-    for (name, d, start, len, full, out) in [
-        (
-            "BlackLevelDeltaH",
-            &deltas.h,
-            x0 - ax.min(x0),
-            w,
-            aw,
-            &mut black.delta_h,
-        ),
-        (
-            "BlackLevelDeltaV",
-            &deltas.v,
-            y0 - ay.min(y0),
-            h,
-            ah,
-            &mut black.delta_v,
-        ),
-    ] {
-        if d.is_empty() {
-            continue;
-        }
-        if d.len() == full && start + len <= full && d.iter().all(|v| v.is_finite()) {
-            *out = d[start..start + len].to_vec();
-        } else {
-            facts.warnings.push(format!(
-                "{name} has {} values for an active area {full} px across (or unreadable values): ignored",
-                d.len()
-            ));
-        }
-    }
+    deltas.apply(
+        &mut black,
+        (x0, y0, w, h),
+        (ax, ay, aw, ah),
+        &mut facts.warnings,
+    );
     let white: Vec<f64> = match image.whitelevel.0.len() {
         n if n == spp => image.whitelevel.0.iter().map(|&v| v as f64).collect(),
         0 => vec![((1u64 << image.bps.clamp(1, 16)) - 1) as f64; spp],
@@ -487,10 +567,6 @@ fn black_levels(image: &RawImage, origin: (usize, usize), spp: usize) -> BlackLe
             }
         })
         .collect();
-    if bl.width == 0 || bl.height == 0 || levels.len() != bl.width * bl.height * spp {
-        let first = levels.first().copied().unwrap_or(0.0);
-        return BlackLevels::uniform(first, spp);
-    }
     let anchor = if image.camera.mode == "dng" {
         image
             .active_area
@@ -500,15 +576,5 @@ fn black_levels(image: &RawImage, origin: (usize, usize), spp: usize) -> BlackLe
     } else {
         (0, 0)
     };
-    let dx = origin.0.saturating_sub(anchor.0);
-    let dy = origin.1.saturating_sub(anchor.1);
-    let (bw, bh) = (bl.width, bl.height);
-    let mut out = Vec::with_capacity(levels.len());
-    for y in 0..bh {
-        for x in 0..bw {
-            let src = (((y + dy) % bh) * bw + (x + dx) % bw) * spp;
-            out.extend_from_slice(&levels[src..src + spp]);
-        }
-    }
-    BlackLevels::repeat(bw, bh, spp, out)
+    BlackLevels::reanchored(levels, bl.width, bl.height, spp, anchor, origin)
 }

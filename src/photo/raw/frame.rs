@@ -219,6 +219,34 @@ impl BlackLevels {
         }
     }
 
+    /// A `width × height` repeat of `levels` (DN, row-major, `samples` per
+    /// site) anchored at buffer pixel `anchor`, re-anchored at the frame's
+    /// top-left pixel `origin`; one uniform level (the first) when the
+    /// levels do not fill the repeat.
+    pub fn reanchored(
+        levels: Vec<f64>,
+        width: usize,
+        height: usize,
+        samples: usize,
+        anchor: (usize, usize),
+        origin: (usize, usize),
+    ) -> BlackLevels {
+        if width == 0 || height == 0 || levels.len() != width * height * samples {
+            let first = levels.first().copied().unwrap_or(0.0);
+            return BlackLevels::uniform(first, samples);
+        }
+        let dx = origin.0.saturating_sub(anchor.0);
+        let dy = origin.1.saturating_sub(anchor.1);
+        let mut out = Vec::with_capacity(levels.len());
+        for y in 0..height {
+            for x in 0..width {
+                let src = (((y + dy) % height) * width + (x + dx) % width) * samples;
+                out.extend_from_slice(&levels[src..src + samples]);
+            }
+        }
+        BlackLevels::repeat(width, height, samples, out)
+    }
+
     /// The black level (DN) of sample `s` at frame pixel (x, y).
     pub fn at(&self, x: usize, y: usize, s: usize) -> f64 {
         self.levels[((y % self.height) * self.width + x % self.width) * self.samples + s]
@@ -324,6 +352,10 @@ pub struct RawFrame {
     pub facts: ExifFacts,
     pub(crate) samples: Samples,
     pub(crate) layout: Layout,
+    /// The frame rectangle whose samples were decoded (see [`RawFrame::decoded_rect`]).
+    pub(crate) decoded: (usize, usize, usize, usize),
+    /// Which decoder read the file, and why rawler when a DNG was not read windowed.
+    pub decoder: String,
 }
 
 impl RawFrame {
@@ -430,6 +462,8 @@ impl RawFrame {
             facts: ids.facts,
             samples,
             layout,
+            decoded: (0, 0, w, h),
+            decoder: String::new(),
         };
         Ok(frame)
     }
@@ -689,6 +723,13 @@ impl RawFrame {
             offset: (x0, y0),
             data,
         }
+    }
+
+    /// The frame rectangle (x0, y0, x1, y1), pixels, end exclusive, whose
+    /// samples were decoded: the whole frame unless the file was read for a
+    /// region only; samples outside it read as 0 DN.
+    pub fn decoded_rect(&self) -> (usize, usize, usize, usize) {
+        self.decoded
     }
 
     /// Bytes held by the decoded samples (the whole decoded buffer, not only the frame).
