@@ -1,7 +1,9 @@
 //! `measure --model SYSTEM.toml|auto [--wavelength 550nm]`: the model beside
 //! the measurement (an `mtf_model` CSV column, a dashed curve on the plot, the
-//! model's MTF50 and measured/modelled MTF50 in the summary), and the photo's
-//! EXIF facts in the summary and as the plot's caption.
+//! model's MTF50 and measured/modelled MTF50 in the summary; for sine patches
+//! a ring at each patch's model value and the median and furthest
+//! measured/model), and the photo's EXIF facts in the summary and as the
+//! plot's caption.
 
 use super::{CliError, Code};
 use serde_json::Value;

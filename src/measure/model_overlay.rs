@@ -6,6 +6,8 @@
 //! simulator: a sweep measures the presampling MTF, not the phase-averaged
 //! sampling MTF. Image frequencies (cycles/pixel, x right, y down) become model
 //! frequencies (cycles/mm, y up) through the pixel pitch: u = fx/p, v = −fy/p.
+//! Sine patches: the model along each patch's sine at its measured frequency,
+//! and measured/model over the patches (median, furthest patch).
 
 use super::{Curve, Measurement, PatchResult};
 use crate::model::system_file::SystemFile;
