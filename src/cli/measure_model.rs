@@ -1,18 +1,23 @@
 //! `measure --model SYSTEM.toml|auto [--wavelength 550nm]`: the model beside
 //! the measurement (an `mtf_model` CSV column, a dashed curve on the plot, the
-//! model's MTF50 and measured/modelled MTF50 in the summary), and the photo's
-//! EXIF facts in the summary and as the plot's caption.
+//! model's MTF50 and measured/modelled MTF50 in the summary; for sine patches
+//! a ring at each patch's model value and the median and furthest
+//! measured/model), and the photo's EXIF facts in the summary and as the
+//! plot's caption.
 
 use super::{CliError, Code};
 use serde_json::Value;
 use std::path::Path;
 use sweepmtf::measure::Measurement;
+use sweepmtf::measure::PatchResult;
 use sweepmtf::measure::model_overlay::{
-    CurveModel, ModelOverlay, ModelSource, OverlayError, evaluate,
+    CurveModel, MIN_MODEL_FOR_RATIO, ModelOverlay, ModelSource, OverlayError, PatchComparison,
+    compare_patches, evaluate, evaluate_patches,
 };
 use sweepmtf::photo::exif::ExifFacts;
 use sweepmtf::report::model_overlay::{
-    PlotExtras, add_exif, add_model, add_mtf_model_column, plot_extras,
+    PlotExtras, add_exif, add_model, add_mtf_model_column, add_patch_comparison,
+    patch_comparison_text, plot_extras,
 };
 
 /// The model options of `sweepmtf measure`.
@@ -91,6 +96,8 @@ pub struct Extras {
     model: Option<(ModelOverlay, Vec<CurveModel>)>,
     /// Model MTF of each sine patch (empty without a model).
     patch_model: Vec<f64>,
+    /// The patches (for naming the furthest one) and measured/model over them.
+    patch_cmp: Option<(Vec<PatchResult>, PatchComparison)>,
     /// Extras for the MTF plot.
     pub plot: PlotExtras,
 }
@@ -115,12 +122,14 @@ impl Prepared {
         );
         let patch_model = model
             .as_ref()
-            .map(|(o, _)| sweepmtf::measure::model_overlay::evaluate_patches(m, o))
+            .map(|(o, _)| evaluate_patches(m, o))
             .unwrap_or_default();
+        let patch_cmp = compare_patches(&m.patches, &patch_model).map(|c| (m.patches.clone(), c));
         Ok(Extras {
             facts: self.facts,
             model,
             patch_model,
+            patch_cmp,
             plot,
         })
     }
@@ -149,16 +158,20 @@ impl Extras {
         add_exif(&mut v, &self.facts);
         if let Some((o, cms)) = &self.model {
             add_model(&mut v, o, cms);
+            if let Some((ps, c)) = &self.patch_cmp {
+                add_patch_comparison(&mut v, c, ps);
+            }
         }
         v
     }
 
-    /// Text appended to the summary line: the model's MTF50 and the ratio.
+    /// Text appended to the summary line: the model's MTF50 and the ratio per
+    /// sweep, and for sine patches the median and furthest measured/model.
     pub fn line_suffix(&self) -> String {
         let Some((o, cms)) = &self.model else {
             return String::new();
         };
-        let parts: Vec<String> = cms
+        let mut parts: Vec<String> = cms
             .iter()
             .map(|c| match (c.mtf50_model_cy_px, c.mtf50_ratio) {
                 (Some(f), Some(r)) => format!("model MTF50 {f:.3} cy/px, measured/model {r:.3}"),
@@ -166,8 +179,15 @@ impl Extras {
                 _ => "model MTF50 not reached".to_string(),
             })
             .collect();
+        match &self.patch_cmp {
+            Some((ps, c)) => parts.push(patch_comparison_text(c, ps)),
+            None if !self.patch_model.is_empty() => parts.push(format!(
+                "no patch below Nyquist with model MTF ≥ {MIN_MODEL_FOR_RATIO} to compare"
+            )),
+            None => {}
+        }
         if parts.is_empty() {
-            format!(" | model {} (mtf_model per patch)", o.name)
+            format!(" | model {}", o.name)
         } else {
             format!(" | model {}: {}", o.name, parts.join("; "))
         }

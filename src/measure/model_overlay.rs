@@ -6,8 +6,10 @@
 //! simulator: a sweep measures the presampling MTF, not the phase-averaged
 //! sampling MTF. Image frequencies (cycles/pixel, x right, y down) become model
 //! frequencies (cycles/mm, y up) through the pixel pitch: u = fx/p, v = −fy/p.
+//! Sine patches: the model along each patch's sine at its measured frequency,
+//! and measured/model over the patches (median, furthest patch).
 
-use super::{Curve, Measurement};
+use super::{Curve, Measurement, PatchResult};
 use crate::model::system_file::SystemFile;
 use crate::model::{ModelError, System, spec::parse_factor};
 use crate::photo::exif::ExifFacts;
@@ -247,27 +249,87 @@ pub fn evaluate(m: &Measurement, model: &ModelOverlay) -> Vec<CurveModel> {
         .collect()
 }
 
+/// The unit image direction (x right, y down) of a patch's sine, from its
+/// binned region's corners ((0, t0), (l, t0), (l, t1), (0, t1) in the strip frame).
+pub fn patch_direction(p: &PatchResult) -> [f64; 2] {
+    let q = p.region_px;
+    let d = [
+        0.5 * (q[1][0] + q[2][0] - q[0][0] - q[3][0]),
+        0.5 * (q[1][1] + q[2][1] - q[0][1] - q[3][1]),
+    ];
+    let n = d[0].hypot(d[1]);
+    if n.is_finite() && n > 1e-9 {
+        [d[0] / n, d[1] / n]
+    } else {
+        [1.0, 0.0]
+    }
+}
+
 /// Model MTF at each sine patch's image frequency, along the patch's own sine
 /// direction in the image (from its binned region's corners), in patch order.
 pub fn evaluate_patches(m: &Measurement, model: &ModelOverlay) -> Vec<f64> {
     m.patches
         .iter()
-        .map(|p| {
-            // region_px: (0, t0), (l, t0), (l, t1), (0, t1) in the patch's strip frame.
-            let q = p.region_px;
-            let d = [
-                0.5 * (q[1][0] + q[2][0] - q[0][0] - q[3][0]),
-                0.5 * (q[1][1] + q[2][1] - q[0][1] - q[3][1]),
-            ];
-            let n = d[0].hypot(d[1]);
-            let dir = if n.is_finite() && n > 1e-9 {
-                [d[0] / n, d[1] / n]
-            } else {
-                [1.0, 0.0]
-            };
-            model.mtf_cy_px(dir, p.freq_cy_px)
-        })
+        .map(|p| model.mtf_cy_px(patch_direction(p), p.freq_cy_px))
         .collect()
+}
+
+/// Smallest model MTF a patch may have to enter the measured/model ratios:
+/// below it (near or beyond the model's cutoff) the ratio of two small numbers
+/// mostly measures noise, and at 0 it is undefined.
+pub const MIN_MODEL_FOR_RATIO: f64 = 0.05;
+
+/// Measured over modelled MTF across the sine patches, in one figure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PatchComparison {
+    /// Patches that entered the ratios (not aliased, finite measured MTF ≥ 0, model ≥ [`MIN_MODEL_FOR_RATIO`]).
+    pub n_used: usize,
+    /// Patches left out (aliased, model below the floor or not finite, measured MTF not finite).
+    pub n_left_out: usize,
+    /// Median of measured/model over the patches used (dimensionless).
+    pub median_ratio: f64,
+    /// Index (in patch order) of the patch whose ratio is furthest from 1 (largest |ln ratio|).
+    pub worst_index: usize,
+    /// That patch's measured/model ratio (dimensionless).
+    pub worst_ratio: f64,
+}
+
+/// Compares measured and modelled MTF over the sine patches (`model` in patch
+/// order, as from [`evaluate_patches`]); `None` when no patch can enter the ratio.
+pub fn compare_patches(patches: &[PatchResult], model: &[f64]) -> Option<PatchComparison> {
+    let mut used: Vec<(usize, f64)> = Vec::new();
+    let mut left_out = 0;
+    for (i, (p, &v)) in patches.iter().zip(model).enumerate() {
+        if p.aliased || !v.is_finite() || v < MIN_MODEL_FOR_RATIO || !p.mtf.is_finite() {
+            left_out += 1;
+            continue;
+        }
+        used.push((i, p.mtf.max(0.0) / v));
+    }
+    left_out += patches.len().saturating_sub(model.len());
+    if used.is_empty() {
+        return None;
+    }
+    // Distance from 1 on a log scale; a measured 0 is infinitely far (and thus worst).
+    let far = |r: f64| if r > 0.0 { r.ln().abs() } else { f64::INFINITY };
+    let &(worst_index, worst_ratio) = used
+        .iter()
+        .fold(&used[0], |a, b| if far(b.1) > far(a.1) { b } else { a });
+    let mut r: Vec<f64> = used.iter().map(|u| u.1).collect();
+    r.sort_by(f64::total_cmp);
+    let k = r.len();
+    let median_ratio = if k % 2 == 1 {
+        r[k / 2]
+    } else {
+        0.5 * (r[k / 2 - 1] + r[k / 2])
+    };
+    Some(PatchComparison {
+        n_used: k,
+        n_left_out: left_out,
+        median_ratio,
+        worst_index,
+        worst_ratio,
+    })
 }
 
 #[cfg(test)]
@@ -312,6 +374,67 @@ mod tests {
         let f50 = o.mtf50_cy_px([1.0, 0.0]).unwrap();
         let want = diff(f50 / p) * sinc(f50);
         assert!((want - 0.5).abs() < 1e-9, "{want}");
+    }
+
+    fn patch(id: &str, mtf: f64, aliased: bool) -> PatchResult {
+        PatchResult {
+            channel: "grey".into(),
+            patch_id: id.into(),
+            freq_chart_cy_mm: 1.0,
+            freq_cy_px: 0.1,
+            modulation: mtf * 0.8,
+            chart_modulation: 0.8,
+            mtf,
+            mtf_err: 0.01,
+            aliased,
+            region_px: [[0.0, 0.0], [10.0, 0.0], [10.0, 5.0], [0.0, 5.0]],
+        }
+    }
+
+    /// Ratios worked out by hand: 0.9/1.0, 0.8/0.8, 0.3/0.2 enter (median 1.0,
+    /// worst 1.5 since |ln 1.5| = 0.405 > |ln 0.9| = 0.105); NaN model, model 0
+    /// (beyond cutoff), model 0.04 (under the floor) and an aliased patch stay out.
+    #[test]
+    fn patch_ratio_summary_by_hand() {
+        let ps = [
+            patch("a", 0.9, false),
+            patch("b", 0.8, false),
+            patch("c", 0.3, false),
+            patch("d", 0.5, false),
+            patch("e", 0.1, false),
+            patch("f", 0.05, false),
+            patch("g", 0.7, true),
+        ];
+        let model = [1.0, 0.8, 0.2, f64::NAN, 0.0, 0.04, 0.6];
+        let c = compare_patches(&ps, &model).unwrap();
+        assert_eq!((c.n_used, c.n_left_out), (3, 4));
+        assert!((c.median_ratio - 1.0).abs() < 1e-12, "{}", c.median_ratio);
+        assert_eq!(c.worst_index, 2);
+        assert!((c.worst_ratio - 1.5).abs() < 1e-12);
+        assert!(c.median_ratio.is_finite() && c.worst_ratio.is_finite());
+
+        // Even count: 0.4/0.5 = 0.8 and 0.6/0.5 = 1.2, median 1.0; 0.8 is
+        // further from 1 (|ln 0.8| = 0.223 > |ln 1.2| = 0.182).
+        let c = compare_patches(
+            &[patch("x", 0.4, false), patch("y", 0.6, false)],
+            &[0.5, 0.5],
+        )
+        .unwrap();
+        assert!((c.median_ratio - 1.0).abs() < 1e-12);
+        assert_eq!((c.worst_index, c.n_left_out), (0, 0));
+        assert!((c.worst_ratio - 0.8).abs() < 1e-12);
+
+        // A measured 0 is the worst possible patch, not a division by zero.
+        let c = compare_patches(
+            &[patch("x", 0.0, false), patch("y", 2.0, false)],
+            &[0.5, 0.5],
+        )
+        .unwrap();
+        assert_eq!((c.worst_index, c.worst_ratio), (0, 0.0));
+
+        // Nothing usable: no comparison at all.
+        assert!(compare_patches(&ps[3..], &model[3..]).is_none());
+        assert!(compare_patches(&[], &[]).is_none());
     }
 
     #[test]

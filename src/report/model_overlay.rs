@@ -1,9 +1,12 @@
 //! Outputs of the model beside the measurement: the `mtf_model` column added
 //! after `mtf` in the curves CSV, the model and EXIF fields of the JSON
-//! summary, and the extras the MTF plot draws (dashed model curves, caption).
+//! summary, and the extras the MTF plot draws (dashed model curves, hollow
+//! rings at the sine patches' model values, caption).
 
 use crate::measure::Measurement;
-use crate::measure::model_overlay::{CurveModel, ModelOverlay};
+use crate::measure::model_overlay::{
+    CurveModel, ModelOverlay, PatchComparison, compare_patches, evaluate_patches, patch_direction,
+};
 use crate::photo::exif::ExifFacts;
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
@@ -19,22 +22,40 @@ pub struct ModelCurve {
     pub points: Vec<(f64, f64)>,
 }
 
+/// The model's value at one sine patch, drawn as a hollow ring.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PatchMark {
+    /// The patch's measured image frequency (cycles/pixel).
+    pub freq_cy_px: f64,
+    /// Model MTF there (finite; dimensionless).
+    pub mtf_model: f64,
+    /// The patch lies above the sampling band (drawn grey like its measured point).
+    pub aliased: bool,
+}
+
 /// What the MTF plot draws beyond the measurement.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PlotExtras {
     /// Model curves, drawn dashed.
     pub model_curves: Vec<ModelCurve>,
+    /// The model at each sine patch (one channel's patches; non-finite values left out).
+    pub patch_marks: Vec<PatchMark>,
     /// A caption line under the plot (EXIF facts), empty for none.
     pub caption: String,
 }
 
-/// Plot extras: one dashed model curve per distinct sweep direction (0–1 cy/px), and the EXIF caption.
+/// Plot extras: one dashed model curve per distinct sweep direction (0–1 cy/px),
+/// one more per orientation of sine patches whose model differs from those
+/// curves, a ring at each patch's model value, and the caption (EXIF facts,
+/// model MTF50 and measured/model; for patch-only results the patch ratios).
 pub fn plot_extras(
     model: Option<(&ModelOverlay, &[CurveModel])>,
     facts: Option<&ExifFacts>,
     m: &Measurement,
 ) -> PlotExtras {
     let mut curves: Vec<ModelCurve> = Vec::new();
+    let mut patch_marks = Vec::new();
+    let mut patch_cmp = None;
     if let Some((o, cms)) = model {
         let mut dirs: Vec<[f64; 2]> = Vec::new();
         for (cm, c) in cms.iter().zip(&m.curves) {
@@ -48,15 +69,15 @@ pub fn plot_extras(
             } else {
                 format!("model along {}", c.sweep_id)
             };
-            let n = 400;
-            let points = (0..=n)
-                .map(|i| {
-                    let f = i as f64 / n as f64;
-                    (f, o.mtf_cy_px(d, f))
-                })
-                .collect();
-            curves.push(ModelCurve { label, points });
+            curves.push(ModelCurve {
+                label,
+                points: sample(o, d),
+            });
         }
+        let values = evaluate_patches(m, o);
+        patch_curves(o, m, &mut curves);
+        patch_marks = marks(m, &values);
+        patch_cmp = compare_patches(&m.patches, &values);
     }
     let mut caption: Vec<String> = facts.map(|f| f.describe()).into_iter().collect();
     if let Some((_, cms)) = model
@@ -67,12 +88,137 @@ pub fn plot_extras(
         if let Some(r) = cm.mtf50_ratio {
             t.push_str(&format!(", measured/model {r:.3}"));
         }
+        if let Some(c) = &patch_cmp {
+            t.push_str(&format!(
+                "; patches measured/model median {:.3}",
+                c.median_ratio
+            ));
+        }
         caption.push(t);
+    } else if m.curves.is_empty()
+        && let Some(c) = &patch_cmp
+    {
+        caption.push(patch_comparison_text(c, &m.patches));
     }
     PlotExtras {
         model_curves: curves,
+        patch_marks,
         caption: caption.join("  ·  "),
     }
+}
+
+/// The model along `d` at 401 frequencies from 0 to 1 cy/px.
+fn sample(o: &ModelOverlay, d: [f64; 2]) -> Vec<(f64, f64)> {
+    let n = 400;
+    (0..=n)
+        .map(|i| {
+            let f = i as f64 / n as f64;
+            (f, o.mtf_cy_px(d, f))
+        })
+        .collect()
+}
+
+/// Patches of the first channel (several channels share frequencies and model values).
+fn first_channel(m: &Measurement) -> impl Iterator<Item = (usize, &crate::measure::PatchResult)> {
+    let ch = m.patches.first().map(|p| p.channel.clone());
+    m.patches
+        .iter()
+        .enumerate()
+        .filter(move |(_, p)| Some(&p.channel) == ch.as_ref())
+}
+
+/// Adds a model curve for each orientation of the sine patches (sines within
+/// 5° of each other share one) unless its values already lie on a curve (within
+/// 0.002), so patch-only targets get the whole model curve through their rings.
+fn patch_curves(o: &ModelOverlay, m: &Measurement, curves: &mut Vec<ModelCurve>) {
+    let mut groups: Vec<([f64; 2], usize)> = Vec::new();
+    for (_, p) in first_channel(m) {
+        let d = patch_direction(p);
+        // Sign does not matter for |OTF|: add d or −d, whichever points the group's way.
+        match groups
+            .iter_mut()
+            .find(|(g, _)| (g[0] * d[1] - g[1] * d[0]).abs() < 0.087)
+        {
+            Some((g, n)) => {
+                let s = if g[0] * d[0] + g[1] * d[1] < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
+                g[0] += s * d[0];
+                g[1] += s * d[1];
+                *n += 1;
+            }
+            None => groups.push((d, 1)),
+        }
+    }
+    for (g, _) in groups {
+        let n = g[0].hypot(g[1]);
+        if !(n.is_finite() && n > 0.0) {
+            continue;
+        }
+        let d = [g[0] / n, g[1] / n];
+        let points = sample(o, d);
+        let known = curves.iter().any(|c| {
+            c.points.len() == points.len()
+                && c.points
+                    .iter()
+                    .zip(&points)
+                    .all(|(a, b)| (a.1 - b.1).abs() < 2e-3)
+        });
+        if known {
+            continue;
+        }
+        // On-screen angle of the sines, counter-clockwise from the image x axis, in 0–180°.
+        let deg = (-d[1]).atan2(d[0]).to_degrees().rem_euclid(180.0);
+        let label = if curves.is_empty() {
+            format!("model: {}", o.name)
+        } else {
+            format!("model along patches at {deg:.0}°")
+        };
+        curves.push(ModelCurve { label, points });
+    }
+}
+
+/// Rings for the first channel's patches with a finite model value.
+fn marks(m: &Measurement, values: &[f64]) -> Vec<PatchMark> {
+    first_channel(m)
+        .filter_map(|(i, p)| {
+            let v = *values.get(i)?;
+            (v.is_finite() && p.freq_cy_px.is_finite()).then_some(PatchMark {
+                freq_cy_px: p.freq_cy_px,
+                mtf_model: v,
+                aliased: p.aliased,
+            })
+        })
+        .collect()
+}
+
+/// One phrase: "patches measured/model median 0.953 over 13 (2 left out), furthest 1.194 at patch 13 (0.406 cy/px)".
+pub fn patch_comparison_text(
+    c: &PatchComparison,
+    patches: &[crate::measure::PatchResult],
+) -> String {
+    let mut t = format!(
+        "patches measured/model median {:.3} over {}",
+        c.median_ratio, c.n_used
+    );
+    if c.n_left_out > 0 {
+        t.push_str(&format!(" ({} left out)", c.n_left_out));
+    }
+    if let Some(p) = patches.get(c.worst_index) {
+        let several = patches.iter().any(|q| q.channel != p.channel);
+        let ch = if several {
+            format!("{} ", p.channel)
+        } else {
+            String::new()
+        };
+        t.push_str(&format!(
+            ", furthest {:.3} at patch {ch}{} ({:.3} cy/px)",
+            c.worst_ratio, p.patch_id, p.freq_cy_px
+        ));
+    }
+    t
 }
 
 /// Inserts an `mtf_model` column after `mtf` in a curves CSV (rows in curve, then point order).
@@ -171,6 +317,56 @@ pub fn draw_model_curves<'a, DB: DrawingBackend + 'a>(
             });
     }
     Ok(())
+}
+
+/// Legend colour of the rings at aliased patches (the grey of aliased measured points).
+const ALIASED_GREY: RGBColor = RGBColor(160, 160, 160);
+
+/// Draws a hollow ring at each patch's model value (black; grey for aliased
+/// patches, like their measured points), clamped to 0..`ymax`, with one legend
+/// entry "model at patches"; non-finite values were left out when the marks were made.
+pub fn draw_patch_marks<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    extras: &PlotExtras,
+    xmax: f64,
+    ymax: f64,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let shown: Vec<&PatchMark> = extras
+        .patch_marks
+        .iter()
+        .filter(|k| k.freq_cy_px.is_finite() && k.mtf_model.is_finite() && k.freq_cy_px <= xmax)
+        .collect();
+    if shown.is_empty() {
+        return Ok(());
+    }
+    let ring = |col: RGBColor| ShapeStyle::from(&col).stroke_width(2);
+    chart
+        .draw_series(shown.iter().map(|k| {
+            let col = if k.aliased { ALIASED_GREY } else { BLACK };
+            Circle::new((k.freq_cy_px, k.mtf_model.clamp(0.0, ymax)), 7, ring(col))
+        }))?
+        .label("model at patches")
+        .legend(move |(x, y)| Circle::new((x + 9, y), 6, ring(BLACK)));
+    Ok(())
+}
+
+/// Adds `model.patches_measured_over_model` (median, patches used and left
+/// out, the furthest patch and its ratio) to a JSON summary that has `model`.
+pub fn add_patch_comparison(
+    v: &mut Value,
+    c: &PatchComparison,
+    patches: &[crate::measure::PatchResult],
+) {
+    let worst = patches.get(c.worst_index);
+    v["model"]["patches_measured_over_model"] = json!({
+        "median": c.median_ratio,
+        "patches_used": c.n_used,
+        "patches_left_out": c.n_left_out,
+        "min_model_mtf": crate::measure::model_overlay::MIN_MODEL_FOR_RATIO,
+        "furthest_patch": worst.map(|p| p.patch_id.clone()),
+        "furthest_channel": worst.map(|p| p.channel.clone()),
+        "furthest_ratio": c.worst_ratio,
+    });
 }
 
 fn freq(f: Option<f64>, pitch_mm: f64) -> Value {

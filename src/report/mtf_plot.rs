@@ -1,6 +1,7 @@
 //! The MTF plot: each curve with its ±1σ error band, aliased points in grey,
 //! the Nyquist frequency and MTF50 marked; sine patches as points with error
-//! bars. PNG or SVG.
+//! bars; with a model, dashed model curves and a hollow ring at each patch's
+//! model value. PNG or SVG.
 
 use super::atomic::ReportError;
 use super::model_overlay::PlotExtras;
@@ -198,8 +199,14 @@ where
     super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     if !m.patches.is_empty() {
         let col = RGBColor(230, 120, 20);
+        // Patches beyond the axis (aliased, far above Nyquist) are left off rather than pinned to its edge.
+        let shown: Vec<_> = m
+            .patches
+            .iter()
+            .filter(|p| p.freq_cy_px.is_finite() && p.freq_cy_px <= xmax && p.mtf.is_finite())
+            .collect();
         chart
-            .draw_series(m.patches.iter().map(|p| {
+            .draw_series(shown.iter().map(|p| {
                 PathElement::new(
                     [
                         (p.freq_cy_px, (p.mtf - p.mtf_err).max(0.0)),
@@ -210,7 +217,7 @@ where
             }))
             .map_err(err)?;
         chart
-            .draw_series(m.patches.iter().map(|p| {
+            .draw_series(shown.iter().map(|p| {
                 let c = if p.aliased {
                     RGBColor(160, 160, 160)
                 } else {
@@ -221,7 +228,15 @@ where
             .map_err(err)?
             .label("sine patches")
             .legend(move |(x, y)| Circle::new((x + 9, y), 4, col.filled()));
+        if !aliased_in_legend && m.patches.iter().any(|p| p.aliased) {
+            chart
+                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+                .map_err(err)?
+                .label("aliased (not MTF)")
+                .legend(|(x, y)| Circle::new((x + 9, y), 4, RGBColor(160, 160, 160).filled()));
+        }
     }
+    super::model_overlay::draw_patch_marks(&mut chart, extras, xmax, ymax).map_err(err)?;
     chart
         .configure_series_labels()
         .label_font((crate::plot::FONT, 15))
