@@ -10,12 +10,14 @@
 //!    with `--roi` on the first sweep strip, with `--roi` on the target
 //!    frame's corners (`--target`), and with the chart found automatically
 //!    from the target's fiducials; then the same for the mosaic stored as
-//!    lossless-JPEG strips (DNG compression 7, as most cameras' raws are
-//!    compressed). The files are deleted at the end unless
+//!    lossless-JPEG strips and as 256-px lossless-JPEG tiles (DNG
+//!    compression 7, as most cameras' raws are compressed). Each group also
+//!    times rawler's own whole decode (`decode_raw_with_rawler`) beside our
+//!    windowed reader's (`decode_raw`). The files are deleted at the end unless
 //!    `SWEEPMTF_BENCH_DNG_DIR` names a folder to keep them in. Peak RSS of
 //!    a whole `measure` run is measured separately with `/usr/bin/time -v`
-//!    (README, "Camera raw and EXIF"), since criterion keeps every case in one
-//!    process.
+//!    (README, "Camera raw and EXIF") or `--example raw_memory`, since
+//!    criterion keeps every case in one process.
 //!
 //! Run: `cargo bench --bench raw` (`-- 24mp` for the big file only).
 
