@@ -266,17 +266,20 @@ pub fn decode_raw_within(
     if !is_dng_path(path) {
         return decode_raw_with_rawler(path);
     }
-    match super::dng::read_dng(path, want)? {
-        super::dng::Dng::Frame(mut f) => {
+    // The windowed reader is a fast path: whatever it does not take or
+    // refuses (other than an unreadable file) gets rawler's own verdict.
+    let why = match super::dng::read_dng(path, want) {
+        Ok(super::dng::Dng::Frame(mut f)) => {
             f.decoder = "sweepmtf windowed DNG reader".to_string();
-            Ok(*f)
+            return Ok(*f);
         }
-        super::dng::Dng::Rawler(why) => {
-            let mut f = decode_raw_with_rawler(path)?;
-            f.decoder = format!("{RAWLER} (not read windowed: {why})");
-            Ok(f)
-        }
-    }
+        Ok(super::dng::Dng::Rawler(why)) => why,
+        Err(e @ RawError::Io { .. }) => return Err(e),
+        Err(e) => format!("the windowed reader refused it: {e}"),
+    };
+    let mut f = decode_raw_with_rawler(path)?;
+    f.decoder = format!("{RAWLER} (not read windowed: {why})");
+    Ok(f)
 }
 
 fn is_dng_path(path: &Path) -> bool {
