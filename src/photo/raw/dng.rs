@@ -20,7 +20,7 @@ use super::frame::{BlackLevels, CfaColour, CfaPattern, Ids, Layout, RawFrame, Sa
 use super::guard;
 use crate::photo::exif::{ExifFacts, clean_text};
 use rawler::decompressors::Decompressor;
-use rawler::decompressors::ljpeg::LJpegDecompressor;
+use rawler::decompressors::ljpeg::LjpegDecompressor;
 use rawler::decompressors::packed::PackedDecompressor;
 use rawler::formats::tiff::reader::TiffReader;
 use rawler::formats::tiff::{GenericTiffReader, IFD, Value};
@@ -68,22 +68,22 @@ struct Source {
 }
 
 impl Source {
-    fn read(&self, offset: u64, len: u64) -> Result<Vec<u8>, String> {
+    /// Reads `len` bytes at `offset` into `buf` (resized to `len`).
+    fn read_into(&self, offset: u64, len: u64, buf: &mut Vec<u8>) -> Result<(), String> {
         if offset.checked_add(len).is_none_or(|end| end > self.len) {
             return Err(format!(
                 "image data at {offset}+{len} runs past the end of the {}-byte file (truncated?)",
                 self.len
             ));
         }
-        let mut buf = vec![0u8; len as usize];
+        buf.resize(len as usize, 0);
         let mut f = self
             .file
             .lock()
             .map_err(|_| "file lock poisoned".to_string())?;
         f.seek(SeekFrom::Start(offset))
-            .and_then(|_| f.read_exact(&mut buf))
-            .map_err(|e| e.to_string())?;
-        Ok(buf)
+            .and_then(|_| f.read_exact(buf))
+            .map_err(|e| e.to_string())
     }
 }
 
@@ -481,6 +481,16 @@ fn unit_table(
     }
 }
 
+thread_local! {
+    /// Per-thread buffers reused from unit to unit: the unit's bytes and its decoded samples.
+    static SCRATCH: std::cell::RefCell<(Vec<u8>, Vec<u16>)> = const {
+        std::cell::RefCell::new((Vec::new(), Vec::new()))
+    };
+}
+
+/// Scratch capacity (elements) kept per thread between decodes.
+const SCRATCH_KEEP: usize = 4 << 20;
+
 /// Rows of an uncompressed unit decoded per task.
 const PACKED_ROWS: usize = 64;
 
@@ -551,46 +561,81 @@ impl Job<'_> {
         let line = u.w * self.spp;
         let (r0, r1) = (rows.0 - uy, rows.1 - uy);
         let (offset, count) = (u.offsets[i], u.counts[i]);
-        let mut buf = vec![0u16; (r1 - r0) * line];
-        match self.codec {
-            Codec::Packed => {
-                let row_bits = line as u64 * self.bits as u64;
-                let dc = PackedDecompressor::new(self.bits, self.endian);
-                let need = (r1 as u64 * row_bits).div_ceil(8);
-                if need > count {
-                    return Err(format!(
-                        "unit {i} holds {count} bytes where {need} are needed"
-                    ));
+        SCRATCH.with(|scratch| {
+            let (bytes, samples) = &mut *scratch.borrow_mut();
+            // `samples` from `first` on: the unit's rows r0..r1, `line` samples each.
+            let first = match self.codec {
+                Codec::Packed => {
+                    let row_bits = line as u64 * self.bits as u64;
+                    let need = (r1 as u64 * row_bits).div_ceil(8);
+                    if need > count {
+                        return Err(format!(
+                            "unit {i} holds {count} bytes where {need} are needed"
+                        ));
+                    }
+                    // Whole bytes up to the first wanted row are skipped when rows are byte aligned.
+                    let (start, skip) = if row_bits.is_multiple_of(8) {
+                        (r0 as u64 * row_bits / 8, 0)
+                    } else {
+                        (0, r0)
+                    };
+                    source.read_into(offset + start, need - start, bytes)?;
+                    samples.resize((r1 - r0) * line, 0);
+                    PackedDecompressor::new(self.bits, self.endian).decompress(
+                        bytes,
+                        skip,
+                        samples.chunks_exact_mut(line),
+                        line,
+                    )?;
+                    0
                 }
-                // Whole bytes up to the first wanted row are skipped when rows are byte aligned.
-                let (start, skip) = if row_bits.is_multiple_of(8) {
-                    (r0 as u64 * row_bits / 8, 0)
-                } else {
-                    (0, r0)
-                };
-                let src = source.read(offset + start, need - start)?;
-                dc.decompress(&src, skip, buf.chunks_exact_mut(line), line)?;
+                Codec::Ljpeg => {
+                    source.read_into(offset, count, bytes)?;
+                    // The whole unit is decoded (into the reused buffer); rows r0.. are kept.
+                    let d = LjpegDecompressor::new(bytes)?;
+                    let (w, h) = (d.width(), d.height());
+                    if w != line || h < r1 {
+                        return Err(format!(
+                            "unit {i} decodes to {w}×{h} samples where {line}×{} are expected",
+                            r1
+                        ));
+                    }
+                    samples.resize(w * h, 0);
+                    d.decode(samples, 0, w, w, h, false)?;
+                    r0 * line
+                }
+            };
+            self.place(&samples[first..first + (r1 - r0) * line], ux, dst);
+            // Big units (one strip for the whole image) are not kept alive per thread.
+            if samples.capacity() > SCRATCH_KEEP {
+                *samples = Vec::new();
             }
-            Codec::Ljpeg => {
-                let src = source.read(offset, count)?;
-                // The whole unit is decoded; its rows from r0 on are kept.
-                LJpegDecompressor::new().decompress(&src, r0, buf.chunks_exact_mut(line), line)?;
+            if bytes.capacity() > SCRATCH_KEEP {
+                *bytes = Vec::new();
             }
-        }
+            Ok(())
+        })
+    }
+
+    /// Copies the unit rows in `rows` (unit width, starting at image column
+    /// `ux`) into the frame rows `dst`, the columns inside the image, the
+    /// frame and the wanted range only.
+    fn place(&self, rows: &[u16], ux: usize, dst: &mut [u16]) {
+        let u = self.units;
+        let line = u.w * self.spp;
         // Columns of this unit inside the image, the frame and the wanted range.
         let (fx, _, fw) = self.frame;
         let xa = ux.max(self.want.0).max(fx);
         let xb = (ux + u.w).min(self.width).min(self.want.2).min(fx + fw);
         if xa >= xb {
-            return Ok(());
+            return;
         }
         let row_len = fw * self.spp;
         let n = (xb - xa) * self.spp;
-        for (k, src_row) in buf.chunks_exact(line).enumerate() {
+        for (k, src_row) in rows.chunks_exact(line).enumerate() {
             let s = (xa - ux) * self.spp;
             let d = k * row_len + (xa - fx) * self.spp;
             dst[d..d + n].copy_from_slice(&src_row[s..s + n]);
         }
-        Ok(())
     }
 }
