@@ -1,6 +1,7 @@
 //! `sweepmtf measure`: arguments, the call into the library, and the outputs
 //! (`STEM.mtf.csv`, `STEM.summary.json`, `STEM.mtf.png|svg`, `STEM.roi.png`,
-//! written atomically) plus one summary line on stdout.
+//! written atomically) plus one summary line on stdout; with several charts
+//! found automatically, one such set per chart as `STEM.chartN.*`.
 
 use super::{CliError, Code};
 use std::path::{Path, PathBuf};
@@ -130,17 +131,14 @@ fn located_failure(a: &Args, opts: &MeasureOptions, e: MeasureError) -> CliError
 pub fn run(a: &Args) -> Result<(), CliError> {
     let t_start = Instant::now();
     let opts = a.flags.options()?;
-    let plot_format = a.flags.plot;
-    let name = a.photo.display().to_string();
     let prepared = super::measure_model::prepare(&a.model, &a.photo)?;
     let t1 = Instant::now();
-    let m = match sweepmtf::measure::measure_file(&a.photo, &opts) {
-        Ok(m) => m,
+    // Every chart found (one set of outputs each), or the one region asked for.
+    let all = match sweepmtf::measure::measure_file_each(&a.photo, &opts) {
+        Ok(all) => all,
         Err(e) => return Err(located_failure(a, &opts, e)),
     };
     let t2 = Instant::now();
-    let extras = prepared.finish(&m)?;
-
     let stem = a
         .photo
         .file_stem()
@@ -152,34 +150,57 @@ pub fn run(a: &Args) -> Result<(), CliError> {
             format!("{}: cannot create output folder: {e}", a.out.display()),
         )
     })?;
+    let several = all.len() > 1;
+    for (i, m) in all.iter().enumerate() {
+        // Several charts: STEM.chartN.* for the chart --chart-index N would pick.
+        let stem = if several {
+            format!("{stem}.chart{i}")
+        } else {
+            stem.clone()
+        };
+        let timings = Timings {
+            measure_ms: (t2 - t1).as_secs_f64() * 1e3,
+            total_ms: (Instant::now() - t_start).as_secs_f64() * 1e3,
+        };
+        write_outputs(a, m, &stem, &prepared, timings)?;
+    }
+    Ok(())
+}
+
+/// Writes one measurement's outputs as `STEM.*` in the output folder and
+/// prints its warnings and its summary line (or JSON).
+fn write_outputs(
+    a: &Args,
+    m: &Measurement,
+    stem: &str,
+    prepared: &super::measure_model::Prepared,
+    timings: Timings,
+) -> Result<(), CliError> {
+    let name = a.photo.display().to_string();
+    let extras = prepared.finish(m)?;
     let out = |suffix: &str| a.out.join(format!("{stem}.{suffix}"));
     let out_err =
         |e: sweepmtf::report::atomic::ReportError| CliError::new(Code::Output, e.to_string());
     let csv_path = out("mtf.csv");
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if m.curves.is_empty() {
-        files.push((csv_path.clone(), extras.patches_csv(csv::patches_csv(&m))));
+        files.push((csv_path.clone(), extras.patches_csv(csv::patches_csv(m))));
     } else {
-        files.push((csv_path.clone(), extras.csv(csv::curves_csv(&m))));
+        files.push((csv_path.clone(), extras.csv(csv::curves_csv(m))));
         if !m.patches.is_empty() {
-            files.push((out("patches.csv"), extras.patches_csv(csv::patches_csv(&m))));
+            files.push((out("patches.csv"), extras.patches_csv(csv::patches_csv(m))));
         }
     }
-    let plot_ext = match plot_format {
+    let plot_ext = match a.flags.plot {
         PlotFormat::Png => "mtf.png",
         PlotFormat::Svg => "mtf.svg",
     };
     files.push((
         out(plot_ext),
-        mtf_plot_with(&m, plot_format, &extras.plot).map_err(out_err)?,
+        mtf_plot_with(m, a.flags.plot, &extras.plot).map_err(out_err)?,
     ));
-    files.push((out("roi.png"), roi_plot::roi_plot(&m).map_err(out_err)?));
-    let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
-    let timings = Timings {
-        measure_ms: ms(t1, t2),
-        total_ms: ms(t_start, Instant::now()),
-    };
-    let summary_value = extras.json(summary(&m, Some(timings)));
+    files.push((out("roi.png"), roi_plot::roi_plot(m).map_err(out_err)?));
+    let summary_value = extras.json(summary(m, Some(timings)));
     let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
     summary_text.push('\n');
     files.push((out("summary.json"), summary_text.into_bytes()));
@@ -190,7 +211,7 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     if a.json {
         println!("{summary_value}");
     } else {
-        println!("{}{}", summary_line(&m, &csv_path), extras.line_suffix());
+        println!("{}{}", summary_line(m, &csv_path), extras.line_suffix());
     }
     Ok(())
 }

@@ -26,7 +26,7 @@ pub struct MeasureFlags {
     /// Accepted for compatibility: refining the --roi corners is the default.
     #[arg(long, hide = true, conflicts_with = "no_refine_roi")]
     pub refine_roi: bool,
-    /// With several charts in the frame (found automatically): which one, 0 = leftmost.
+    /// With several charts in the frame (found automatically): measure only this one, 0 = leftmost. Without it, `measure` measures each (outputs STEM.chartN.*) and `batch` the leftmost.
     #[arg(long, value_name = "N")]
     pub chart_index: Option<usize>,
     /// Modulation estimator: extrema | fit | envelope.

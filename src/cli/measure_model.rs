@@ -104,8 +104,8 @@ pub struct Extras {
 
 impl Prepared {
     /// Builds the model at the measurement's pixel pitch and evaluates it at every point.
-    pub fn finish(self, m: &Measurement) -> Result<Extras, CliError> {
-        let model = match self.source {
+    pub fn finish(&self, m: &Measurement) -> Result<Extras, CliError> {
+        let model = match self.source.clone() {
             None => None,
             Some(src) => {
                 let o = ModelOverlay::build(src, &self.facts, m.pixel_pitch_mm, self.wavelength_mm)
@@ -126,7 +126,7 @@ impl Prepared {
             .unwrap_or_default();
         let patch_cmp = compare_patches(&m.patches, &patch_model).map(|c| (m.patches.clone(), c));
         Ok(Extras {
-            facts: self.facts,
+            facts: self.facts.clone(),
             model,
             patch_model,
             patch_cmp,

@@ -248,6 +248,91 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
     if crate::photo::raw::is_raw_path(path) {
         return measure_raw(path, &name, target.as_ref(), opts);
     }
+    let (dec, o, pitch_warnings) = decode_with_pitch(path, &name, opts)?;
+    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o)?;
+    m.warnings.extend(pitch_warnings);
+    Ok(m)
+}
+
+/// Decodes a photo and measures every chart in it: with `--target` and
+/// neither a region nor a chart index, each chart found from the fiducials
+/// (left to right; the photo is decoded and searched once); otherwise the
+/// one [`measure_file`] measures.
+pub fn measure_file_each(
+    path: &Path,
+    opts: &MeasureOptions,
+) -> Result<Vec<Measurement>, MeasureError> {
+    if opts.roi.is_some() || opts.chart_index.is_some() || opts.target.is_none() {
+        return measure_file(path, opts).map(|m| vec![m]);
+    }
+    let name = path.display().to_string();
+    let err = |failure: Failure| MeasureError {
+        path: name.clone(),
+        failure,
+    };
+    let target = load_target(opts).map_err(err)?.ok_or(err(Failure::NoRoi))?;
+    check_options(opts).map_err(err)?;
+    let located = |plane: &Plane| {
+        crate::locate::find_charts(plane, &target)
+            .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))
+    };
+    if crate::photo::raw::is_raw_path(path) {
+        let frame =
+            crate::photo::raw::decode_raw(path).map_err(|e| err(Failure::Raw(e.to_string())))?;
+        let charts = located(&frame.location_plane())?;
+        let n = charts.len();
+        return charts
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let w = found_warnings(c, i, n);
+                let m = measure_frame_at(&frame, &name, Some(&target), opts, &c.corners_px, w)?;
+                Ok(name_chart(m, i, n))
+            })
+            .collect();
+    }
+    let (dec, o, pitch_warnings) = decode_with_pitch(path, &name, opts)?;
+    let charts = located(&full_grey(&dec)[0])?;
+    let n = charts.len();
+    charts
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let w = found_warnings(c, i, n);
+            let mut m = measure_decoded_at(&dec, &name, Some(&target), &o, &c.corners_px, None, w)?;
+            m.warnings.extend(pitch_warnings.iter().cloned());
+            Ok(name_chart(m, i, n))
+        })
+        .collect()
+}
+
+/// With several charts, the measurement's source names its chart: "photo.jpg [chart 1]".
+fn name_chart(mut m: Measurement, i: usize, n: usize) -> Measurement {
+    if n > 1 {
+        m.source = format!("{} [chart {i}]", m.source);
+    }
+    m
+}
+
+/// The warnings of a chart found automatically: the search's own, and which
+/// of `n` charts (left to right) it is when there are several.
+fn found_warnings(c: &crate::locate::Located, i: usize, n: usize) -> Vec<String> {
+    let mut w = c.warnings.clone();
+    w.push("region found automatically from the target's fiducials".into());
+    if n > 1 {
+        w.push(format!("chart index {i} of the {n} found (left to right)"));
+    }
+    w
+}
+
+/// Reads and decodes a photo (not a raw), and resolves its pixel pitch from
+/// EXIF and the options: the photo, the options with the pitch, the pitch's warnings.
+fn decode_with_pitch(
+    path: &Path,
+    name: &str,
+    opts: &MeasureOptions,
+) -> Result<(Decoded, MeasureOptions, Vec<String>), MeasureError> {
+    let name = name.to_string();
     let bytes = std::fs::read(path).map_err(|source| MeasureError {
         path: name.clone(),
         failure: DecodeError::Io {
@@ -267,9 +352,7 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o)?;
-    m.warnings.extend(pitch.warnings);
-    Ok(m)
+    Ok((dec, o, pitch.warnings))
 }
 
 /// Measures a camera raw file: linear CFA planes, no demosaicing, no tone curve.
@@ -283,7 +366,7 @@ pub fn measure_raw(
     target: Option<&Target>,
     opts: &MeasureOptions,
 ) -> Result<Measurement, MeasureError> {
-    use crate::photo::raw::{RawChannel, decode_raw_within};
+    use crate::photo::raw::decode_raw_within;
     let err = |failure: Failure| MeasureError {
         path: name.to_string(),
         failure,
@@ -303,8 +386,7 @@ pub fn measure_raw(
             let plane = frame.location_plane();
             let loc = crate::locate::find_chart(&plane, t, opts.chart_index)
                 .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
-            warnings.extend(loc.warnings);
-            warnings.push("region found automatically from the target's fiducials".into());
+            warnings.extend(found_warnings(&loc, 0, 1));
             loc.corners_px
         }
         _ => {
@@ -319,6 +401,25 @@ pub fn measure_raw(
             }
         }
     };
+    measure_frame_at(&frame, name, target, opts, &roi, warnings)
+}
+
+/// The part of [`measure_raw`] after the region is known: `roi` (frame px)
+/// and the warnings so far.
+fn measure_frame_at(
+    frame: &crate::photo::raw::RawFrame,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    mut warnings: Vec<String>,
+) -> Result<Measurement, MeasureError> {
+    use crate::photo::raw::RawChannel;
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    let roi = *roi;
     if let Some(o) = frame.facts.orientation.filter(|&o| o != 1) {
         warnings.push(format!(
             "raw file with EXIF orientation {o}: region and plots are in the stored sensor frame ({}×{} px, not turned)",
@@ -487,8 +588,7 @@ pub fn measure_decoded(
             let grey = full_grey(dec);
             let loc = crate::locate::find_chart(&grey[0], t, opts.chart_index)
                 .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
-            warnings.extend(loc.warnings);
-            warnings.push("region found automatically from the target's fiducials".into());
+            warnings.extend(found_warnings(&loc, 0, 1));
             loc.corners_px
         }
         _ => {
@@ -505,6 +605,26 @@ pub fn measure_decoded(
             }
         }
     };
+    measure_decoded_at(dec, name, target, opts, &roi, seen, warnings)
+}
+
+/// The part of [`measure_decoded`] after the region is known: `roi` (image
+/// px), the refinement's luminance plane `seen` (reused when it holds what
+/// the measurement reads) and the warnings so far.
+fn measure_decoded_at(
+    dec: &Decoded,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    seen: Option<(Crop, Plane)>,
+    mut warnings: Vec<String>,
+) -> Result<Measurement, MeasureError> {
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    let roi = *roi;
     // Crop: the region's bounding box (+2 px).
     let crop = bbox_crop(&roi, dec.width, dec.height, 2.0);
     let (tone, tone_desc) = if opts.tone_chart {

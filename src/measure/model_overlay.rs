@@ -29,7 +29,7 @@ pub enum OverlayError {
 }
 
 /// Which model to draw.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub enum ModelSource {
     /// A system file, already read and built.
     File {
@@ -38,7 +38,7 @@ pub enum ModelSource {
         /// One line: the factors as kind spec, joined by ×.
         description: String,
         /// The factors.
-        system: System,
+        system: std::sync::Arc<System>,
     },
     /// Diffraction at the EXIF f-number × a square pixel aperture of the pitch.
     Auto,
@@ -63,7 +63,7 @@ impl ModelSource {
         Ok(ModelSource::File {
             name,
             description,
-            system,
+            system: std::sync::Arc::new(system),
         })
     }
 }
@@ -86,7 +86,7 @@ pub struct ModelOverlay {
     pub left_out: Vec<String>,
     /// Pixel pitch (mm) converting cycles/pixel to cycles/mm.
     pub pitch_mm: f64,
-    system: System,
+    system: std::sync::Arc<System>,
     used: Vec<bool>,
 }
 
@@ -129,7 +129,7 @@ impl ModelOverlay {
                         pitch_mm * 1e3
                     ),
                     describe(specs.iter().map(|(k, s)| (k.as_str(), s.as_str()))),
-                    System { factors },
+                    std::sync::Arc::new(System { factors }),
                 )
             }
         };

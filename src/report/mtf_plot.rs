@@ -161,7 +161,12 @@ where
             .map_err(err)?
             .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], col.stroke_width(2)));
-        let aliased: Vec<_> = c.points.iter().filter(|p| p.aliased).collect();
+        // Aliased points beyond the axis are left off rather than piled at its edge.
+        let aliased: Vec<_> = c
+            .points
+            .iter()
+            .filter(|p| p.aliased && p.freq_cy_px <= xmax)
+            .collect();
         if !aliased.is_empty() {
             let dots = chart
                 .draw_series(aliased.iter().map(|p| {
