@@ -19,6 +19,7 @@ pub mod downscale;
 pub mod ellipse;
 pub mod refine;
 pub mod sample;
+pub mod strip_ends;
 
 use crate::geometry::{Homography, Point};
 use crate::photo::Plane;

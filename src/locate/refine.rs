@@ -555,7 +555,15 @@ pub fn refine_roi(
         }
         h = fit_homography(h, &edges, &[]);
     }
-    let out = src.map(|p| h.apply(p));
+    let mut out = src.map(|p| h.apply(p));
+    // Corners off by up to `search_px` slant an end by up to about twice that.
+    let max_slant = 2.0 * search_px + 4.0;
+    if target.is_none() {
+        // The ends kept the user's (slanted) lines: turn them along the printed bars.
+        let fit = super::strip_ends::align_ends(&full, &h, max_slant)
+            .map_err(|m| LocateError::Refine(format!("strip ends: {m}")))?;
+        out = fit.corners;
+    }
     check_quad(&out).map_err(|e| LocateError::Refine(e.to_string()))?;
     // The seen edges must lie on the refined lines; else they were not one clear edge each.
     let rms = (seen_edges
@@ -574,8 +582,14 @@ pub fn refine_roi(
         .zip(&corners)
         .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
         .fold(0.0, f64::max);
-    // (A strip's ends are also moved inward by the search range on purpose.)
-    let trim = if target.is_none() { search_px } else { 0.0 };
+    // (A strip's ends are also moved inward by the search range on purpose, and
+    // turned along the bars about their centres: each end corner slides along its
+    // long edge by up to half the largest slant.)
+    let trim = if target.is_none() {
+        search_px + 0.5 * max_slant
+    } else {
+        0.0
+    };
     let limit = std::f64::consts::SQRT_2 * search_px + 2.0 + trim;
     if moved > limit {
         return fail(format!(
