@@ -365,7 +365,9 @@ pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<End
         ));
     }
     let n = ((len_px / STEP_PX).ceil() as usize + 1).min(60_000);
-    let lines = (((V_RANGE.1 - V_RANGE.0) * wid_px).round() as usize).clamp(BANDS, 400);
+    // About one line per pixel across the strip (at most 128: enough samples on a
+    // wide strip, and the cost stays bounded).
+    let lines = (((V_RANGE.1 - V_RANGE.0) * wid_px).round() as usize).clamp(BANDS, 128);
     let mut s = Slant { a: 0.0, b: 0.0 };
     let passes = [(max_slant_px, 0.25), (1.5, 0.05), (0.5, 0.02)];
     let mut last = (0, f64::NAN);
@@ -430,4 +432,104 @@ pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<End
         windows: last.0,
         rms_px: last.1,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::photo::Plane;
+
+    /// A log sweep strip (0.02 → 0.6 cycles/px along 600 px, so its last part aliases)
+    /// rendered under perspective on white, 4×4 supersampled, and the strip's true
+    /// homography (unit square → image).
+    fn render(contrast: f64) -> (Plane, Homography) {
+        let (w, h) = (720usize, 260usize);
+        let truth = Homography::from_quads(
+            &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            &[[52.3, 61.7], [668.1, 40.2], [655.4, 201.9], [60.8, 181.1]],
+        )
+        .unwrap();
+        let inv = truth.inverse().unwrap();
+        let (f0, f1, len) = (0.02f64, 0.6f64, 600.0);
+        let r = f1 / f0;
+        let phase = |u: f64| len * f0 * (r.powf(u) - 1.0) / r.ln();
+        let mut data = vec![0f32; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let mut acc = 0.0;
+                for sy in 0..4 {
+                    for sx in 0..4 {
+                        let p = [
+                            x as f64 + (sx as f64 + 0.5) / 4.0,
+                            y as f64 + (sy as f64 + 0.5) / 4.0,
+                        ];
+                        let q = inv.apply(p);
+                        acc += if (0.0..=1.0).contains(&q[0]) && (0.0..=1.0).contains(&q[1]) {
+                            0.5 + 0.5 * contrast * (std::f64::consts::TAU * phase(q[0])).cos()
+                        } else {
+                            1.0
+                        };
+                    }
+                }
+                data[y * w + x] = (acc / 16.0) as f32;
+            }
+        }
+        (Plane::full(w, h, data), truth)
+    }
+
+    /// Corners on the true long edges at the given u (top, bottom) for each end.
+    fn on_edges(truth: &Homography, u: [[f64; 2]; 2]) -> Homography {
+        let c = [
+            truth.apply([u[0][0], 0.0]),
+            truth.apply([u[1][0], 0.0]),
+            truth.apply([u[1][1], 1.0]),
+            truth.apply([u[0][1], 1.0]),
+        ];
+        Homography::from_quads(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], &c).unwrap()
+    }
+
+    #[test]
+    fn slanted_ends_are_turned_along_the_bars() {
+        let (plane, truth) = render(0.8);
+        let g = Gray::of_plane(&plane);
+        // Ends slanted by about ±6 px (0.01 of the length) the opposite ways.
+        let given = on_edges(&truth, [[0.02, 0.03], [0.985, 0.975]]);
+        let fit = align_ends(&g, &given, 20.0).unwrap();
+        let inv = truth.inverse().unwrap();
+        let q = fit.corners.map(|p| inv.apply(p));
+        // Each new end is one bar: the same u (true frame) at both long edges.
+        let px = 600.0;
+        assert!(((q[3][0] - q[0][0]) * px).abs() < 0.15, "{q:?}");
+        assert!(((q[2][0] - q[1][0]) * px).abs() < 0.3, "{q:?}");
+        // On the long edges, and pivoted about the given ends' centres.
+        for (k, v) in [(0, 0.0), (1, 0.0), (2, 1.0), (3, 1.0)] {
+            assert!((q[k][1] - v).abs() < 1e-9, "{q:?}");
+        }
+        assert!((0.5 * (q[0][0] + q[3][0]) - 0.025).abs() < 0.002, "{q:?}");
+        assert!((0.5 * (q[1][0] + q[2][0]) - 0.98).abs() < 0.002, "{q:?}");
+    }
+
+    #[test]
+    fn low_contrast_strip_still_gives_the_bars() {
+        let (plane, truth) = render(0.1);
+        let g = Gray::of_plane(&plane);
+        let given = on_edges(&truth, [[0.03, 0.02], [0.97, 0.98]]);
+        let fit = align_ends(&g, &given, 20.0).unwrap();
+        let q = fit.corners.map(|p| truth.inverse().unwrap().apply(p));
+        assert!(((q[3][0] - q[0][0]) * 600.0).abs() < 0.15, "{q:?}");
+    }
+
+    #[test]
+    fn a_strip_without_bars_is_refused() {
+        let (w, h) = (400usize, 120usize);
+        let plane = Plane::full(w, h, vec![0.5; w * h]);
+        let g = Gray::of_plane(&plane);
+        let given = Homography::from_quads(
+            &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            &[[20.0, 20.0], [380.0, 22.0], [378.0, 100.0], [22.0, 98.0]],
+        )
+        .unwrap();
+        let e = align_ends(&g, &given, 20.0).unwrap_err();
+        assert!(e.contains("not clearly seen"), "{e}");
+    }
 }
