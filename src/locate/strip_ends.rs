@@ -510,6 +510,26 @@ mod tests {
     }
 
     #[test]
+    fn corners_given_from_the_high_frequency_end_work_too() {
+        let (plane, truth) = render(0.8);
+        let g = Gray::of_plane(&plane);
+        // The same strip with the corners' order turned by two (u and v reversed).
+        let c = [
+            truth.apply([0.975, 1.0]),
+            truth.apply([0.03, 1.0]),
+            truth.apply([0.02, 0.0]),
+            truth.apply([0.985, 0.0]),
+        ];
+        let given =
+            Homography::from_quads(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], &c).unwrap();
+        let fit = align_ends(&g, &given, 20.0).unwrap();
+        let q = fit.corners.map(|p| truth.inverse().unwrap().apply(p));
+        // Corners 0/3 are now the high-frequency end, 1/2 the low one.
+        assert!(((q[3][0] - q[0][0]) * 600.0).abs() < 0.3, "{q:?}");
+        assert!(((q[2][0] - q[1][0]) * 600.0).abs() < 0.15, "{q:?}");
+    }
+
+    #[test]
     fn low_contrast_strip_still_gives_the_bars() {
         let (plane, truth) = render(0.1);
         let g = Gray::of_plane(&plane);
