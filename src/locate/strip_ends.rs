@@ -18,6 +18,7 @@
 
 use super::sample::Gray;
 use crate::geometry::{Homography, Point};
+use rayon::prelude::*;
 
 /// The slant correction found for a strip's ends.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,6 +42,8 @@ const V_RANGE: (f64, f64) = (0.15, 0.85);
 const BANDS: usize = 12;
 /// Windows along the strip (half-overlapping).
 const WINDOWS: usize = 24;
+/// Most samples of a window searched (its centre part; 120 px).
+const WIN_MAX: usize = 480;
 
 /// Slant model: `s(u0) = a + b·u0` (u per unit v).
 #[derive(Debug, Clone, Copy)]
@@ -68,34 +71,35 @@ struct Bands {
 fn sample_bands(g: &Gray<'_>, h: &Homography, n: usize, lines: usize, s: Slant) -> Bands {
     let du = 1.0 / (n - 1) as f64;
     let bands = BANDS.min(lines);
-    let mut prof = vec![vec![0.0; n]; bands];
-    let mut count = vec![0usize; bands];
-    let mut dv = vec![0.0; bands];
-    for j in 0..lines {
-        let v = V_RANGE.0 + (V_RANGE.1 - V_RANGE.0) * (j as f64 + 0.5) / lines as f64;
-        let b = j * bands / lines;
-        count[b] += 1;
-        dv[b] += v - 0.5;
-        let row = &mut prof[b];
-        for (i, acc) in row.iter_mut().enumerate() {
-            let u0 = i as f64 * du;
-            let p = h.apply([u0 + (v - 0.5) * s.at(u0), v]);
-            *acc += g.at_img(p).unwrap_or(f64::NAN);
-        }
-    }
-    for b in 0..bands {
-        let c = count[b].max(1) as f64;
-        dv[b] /= c;
-        for x in prof[b].iter_mut() {
-            *x /= c;
-        }
-    }
+    let level = |j: usize| V_RANGE.0 + (V_RANGE.1 - V_RANGE.0) * (j as f64 + 0.5) / lines as f64;
+    let out: Vec<(Vec<f64>, f64)> = (0..bands)
+        .into_par_iter()
+        .map(|b| {
+            let mine: Vec<usize> = (0..lines).filter(|&j| j * bands / lines == b).collect();
+            let mut row = vec![0.0; n];
+            for &j in &mine {
+                let v = level(j);
+                for (i, acc) in row.iter_mut().enumerate() {
+                    let u0 = i as f64 * du;
+                    let p = h.apply([u0 + (v - 0.5) * s.at(u0), v]);
+                    *acc += g.at_img(p).unwrap_or(f64::NAN);
+                }
+            }
+            let c = mine.len().max(1) as f64;
+            row.iter_mut().for_each(|x| *x /= c);
+            let dv = mine.iter().map(|&j| level(j) - 0.5).sum::<f64>() / c;
+            (row, dv)
+        })
+        .collect();
+    let (prof, dv) = out.into_iter().unzip();
     Bands { prof, dv, du }
 }
 
 /// One window's best residual slant.
 #[derive(Debug, Clone, Copy)]
 struct WinSlant {
+    /// Window index.
+    idx: usize,
     /// Window centre (u0).
     u: f64,
     /// Residual slant (px across the whole strip height).
@@ -169,7 +173,7 @@ fn dominant_freq(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 
         .collect();
     // Frequencies from 1.5 cycles per window to a quarter of the grid rate.
     let (lo, hi) = (1.5 / n as f64, 0.25);
-    let steps = 400;
+    let steps = 240;
     let mut best = (0.0, lo);
     for k in 0..=steps {
         let f = lo + (hi - lo) * k as f64 / steps as f64;
@@ -194,17 +198,28 @@ fn dominant_freq(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 
     best.1
 }
 
-/// Searches each window for the residual slant (±`range_px`, steps of `step_px`);
-/// windows without one clear peak are left out.
-fn window_slants(b: &Bands, h: &Homography, range_px: f64, step_px: f64) -> Vec<WinSlant> {
+/// Searches each window (all, or those in `only`) for the residual slant
+/// (±`range_px`, steps of `step_px`); windows without one clear peak are left out.
+/// With `freq`, each window's dominant frequency is measured too (else 0).
+fn window_slants(
+    b: &Bands,
+    h: &Homography,
+    range_px: f64,
+    step_px: f64,
+    only: Option<&[usize]>,
+    freq: bool,
+) -> Vec<WinSlant> {
     let n = b.prof[0].len();
     let len = 2 * n / (WINDOWS + 1);
-    let mut out = Vec::new();
     let dv_max = b.dv.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    for w in 0..WINDOWS {
+    let all: Vec<usize> = (0..WINDOWS).collect();
+    let one = |&w: &usize| -> Option<WinSlant> {
+        // The window's centre part of at most WIN_MAX samples (long strips have plenty).
         let start = w * len / 2;
-        let (i0, i1) = (start, (start + len).min(n));
-        let uc = (i0 + i1) as f64 * 0.5 * b.du;
+        let (a, z) = (start, (start + len).min(n));
+        let cut = (z - a).saturating_sub(WIN_MAX) / 2;
+        let (i0, i1) = (a + cut, z - cut);
+        let uc = (a + z) as f64 * 0.5 * b.du;
         let px_per_u = {
             let (p, q) = (h.apply([uc - 0.01, 0.5]), h.apply([uc + 0.01, 0.5]));
             (q[0] - p[0]).hypot(q[1] - p[1]) / 0.02
@@ -213,13 +228,13 @@ fn window_slants(b: &Bands, h: &Homography, range_px: f64, step_px: f64) -> Vec<
         let steps_per_px = 1.0 / (px_per_u * b.du);
         let reach = (dv_max * range_px * steps_per_px).ceil() as usize + 2;
         if i0 < reach || i1 + reach >= n || i1 <= i0 + 16 {
-            continue;
+            return None;
         }
         if b.prof
             .iter()
             .any(|p| p[i0 - reach..i1 + reach].iter().any(|v| !v.is_finite()))
         {
-            continue;
+            return None;
         }
         let means: Vec<f64> = b
             .prof
@@ -231,14 +246,10 @@ fn window_slants(b: &Bands, h: &Homography, range_px: f64, step_px: f64) -> Vec<
         let es: Vec<f64> = (-m..=m)
             .map(|k| energy(b, &means, i0, i1, k as f64 * step_px * steps_per_px) / inc)
             .collect();
-        let (k, &emax) = es
-            .iter()
-            .enumerate()
-            .max_by(|x, y| x.1.total_cmp(y.1))
-            .expect("non-empty");
+        let (k, &emax) = es.iter().enumerate().max_by(|x, y| x.1.total_cmp(y.1))?;
         // The bands must line up clearly (more than twice the energy of no alignment)...
         if k == 0 || k + 1 == es.len() || emax < 2.0 {
-            continue;
+            return None;
         }
         // ...and at one slant only (no rival peak half as far above incoherence).
         let sep = (1.0 / step_px).ceil() as usize;
@@ -251,20 +262,25 @@ fn window_slants(b: &Bands, h: &Homography, range_px: f64, step_px: f64) -> Vec<
         let (e0, e1, e2) = (es[k - 1], es[k], es[k + 1]);
         let den = e0 - 2.0 * e1 + e2;
         if rival || den >= 0.0 {
-            continue;
+            return None;
         }
         let sub = (0.5 * (e0 - e2) / den).clamp(-0.5, 0.5);
         let d_px = (k as f64 - m as f64 + sub) * step_px;
-        let f = dominant_freq(b, &means, i0, i1, d_px * steps_per_px) * steps_per_px;
-        out.push(WinSlant {
+        let f = if freq {
+            dominant_freq(b, &means, i0, i1, d_px * steps_per_px) * steps_per_px
+        } else {
+            0.0
+        };
+        Some(WinSlant {
+            idx: w,
             u: uc,
             d_px,
             px_per_u,
             w: -den / (step_px * step_px),
             freq_cy_px: f,
-        });
-    }
-    out
+        })
+    };
+    only.unwrap_or(&all).par_iter().filter_map(one).collect()
 }
 
 /// The windows of the sweep below `F_MAX` cycles/px, walking from its low-frequency
@@ -365,15 +381,24 @@ pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<End
         ));
     }
     let n = ((len_px / STEP_PX).ceil() as usize + 1).min(60_000);
-    // About one line per pixel across the strip (at most 128: enough samples on a
+    // About one line per pixel across the strip (at most 32: enough samples on a
     // wide strip, and the cost stays bounded).
-    let lines = (((V_RANGE.1 - V_RANGE.0) * wid_px).round() as usize).clamp(BANDS, 128);
+    let lines = (((V_RANGE.1 - V_RANGE.0) * wid_px).round() as usize).clamp(BANDS, 32);
     let mut s = Slant { a: 0.0, b: 0.0 };
-    let passes = [(max_slant_px, 0.25), (1.5, 0.05), (0.5, 0.02)];
+    let passes = [(max_slant_px, 0.5), (1.5, 0.05)];
     let mut last = (0, f64::NAN);
+    // The windows below aliasing, chosen in the first pass.
+    let mut chosen: Option<Vec<usize>> = None;
     for &(range, step) in &passes {
         let bands = sample_bands(g, h, n, lines, s);
-        let ws = below_aliasing(window_slants(&bands, h, range, step));
+        let ws = match &chosen {
+            None => {
+                let ws = below_aliasing(window_slants(&bands, h, range, step, None, true));
+                chosen = Some(ws.iter().map(|w| w.idx).collect());
+                ws
+            }
+            Some(only) => window_slants(&bands, h, range, step, Some(only), false),
+        };
         if ws.len() < 4 {
             return Err(format!(
                 "the bars' direction is not clearly seen ({} of {WINDOWS} windows along the strip)",
