@@ -7,14 +7,17 @@
 //! crossing the centre line at `u0` is `u = u0 + (v − ½)·s(u0)` with a slant
 //! `s` that is exactly linear in `u0`.
 //!
-//! The slant is measured from the image: lines of constant v (about one pixel
-//! apart, sheared along the current slant estimate) are sampled, grouped into
-//! bands, and in windows along the strip the residual slant that makes the
-//! bands' sum most energetic (the bars line up) is found; a robust weighted
-//! line through the windows' slants updates `s`. Three passes, from a wide
-//! coarse search to a fine one. The end lines are then the bars through the
-//! current ends' centre points, so the strip's extent (already kept inside the
-//! user's lines) is unchanged and only the slant is corrected.
+//! The slant is measured from the image: lines of constant v (about a pixel
+//! apart, at most 32, sheared along the current slant estimate) are sampled
+//! every 0.25 px along the strip and grouped into 12 bands; in 24 windows along
+//! the strip the residual slant that makes the bands' sum most energetic (the
+//! bars line up) is found. Only windows below aliasing count (from the
+//! low-frequency end while the frequency rises, ≤ 0.42 cy/px): beyond, the bars
+//! alias into patterns of other directions. A robust weighted line through the
+//! windows' slants updates `s`; two passes, a wide coarse search and a fine
+//! one. The end lines are then the bars through the current ends' centre
+//! points, so the strip's extent (already kept inside the user's lines) is
+//! unchanged and only the slant is corrected.
 
 use super::sample::Gray;
 use crate::geometry::{Homography, Point};
@@ -317,7 +320,7 @@ fn fit_line(ws: &[WinSlant]) -> Option<(Slant, usize, f64)> {
     for _ in 0..4 {
         let (mut s0, mut s1, mut s2, mut t0, mut t1) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for (w, _) in ws.iter().zip(&keep).filter(|x| *x.1) {
-            // weight of a slant in u units: curvature in px² scaled
+            // A slant's weight in u units: the energy's curvature (per px²) scaled.
             let y = w.d_px / w.px_per_u;
             let wt = w.w * w.px_per_u * w.px_per_u;
             s0 += wt;
@@ -334,7 +337,7 @@ fn fit_line(ws: &[WinSlant]) -> Option<(Slant, usize, f64)> {
             a: (t0 * s2 - t1 * s1) / det,
             b: (s0 * t1 - s1 * t0) / det,
         };
-        // Residuals in px; scale from the weighted median of their sizes.
+        // Residuals in px; a robust scale from the median of their sizes.
         let res: Vec<f64> = ws
             .iter()
             .map(|w| (w.d_px - line.at(w.u) * w.px_per_u).abs())
