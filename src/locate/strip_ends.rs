@@ -312,9 +312,20 @@ fn below_aliasing(ws: Vec<WinSlant>) -> Vec<WinSlant> {
 /// Highest local frequency (cycles/px along the strip) a window may have.
 const F_MAX: f64 = 0.42;
 
-/// Robust weighted line `d_u = a + b·u` through the windows' slants (in u per unit v);
-/// returns the line, the inliers and their weighted RMS about it in px.
-fn fit_line(ws: &[WinSlant]) -> Option<(Slant, usize, f64)> {
+/// A robust line through the windows' slants.
+struct LineFit {
+    /// The slant correction.
+    line: Slant,
+    /// Windows kept.
+    inliers: usize,
+    /// Their weighted RMS about the line (px).
+    rms_px: f64,
+    /// Standard error of the line at u = 0 and u = 1 (u per unit v), from the scatter.
+    sigma_u: [f64; 2],
+}
+
+/// Robust weighted line `d_u = a + b·u` through the windows' slants (in u per unit v).
+fn fit_line(ws: &[WinSlant]) -> Option<LineFit> {
     let mut keep = vec![true; ws.len()];
     let mut line = Slant { a: 0.0, b: 0.0 };
     for _ in 0..4 {
@@ -360,13 +371,34 @@ fn fit_line(ws: &[WinSlant]) -> Option<(Slant, usize, f64)> {
         }
     }
     let (mut se, mut sw, mut n) = (0.0, 0.0, 0);
+    let (mut s0, mut s1, mut s2, mut su) = (0.0, 0.0, 0.0, 0.0);
     for (w, _) in ws.iter().zip(&keep).filter(|x| *x.1) {
         let r = w.d_px - line.at(w.u) * w.px_per_u;
         se += w.w * r * r;
         sw += w.w;
         n += 1;
+        let wt = w.w * w.px_per_u * w.px_per_u;
+        let ru = r / w.px_per_u;
+        s0 += wt;
+        s1 += wt * w.u;
+        s2 += wt * w.u * w.u;
+        su += wt * ru * ru;
     }
-    Some((line, n, (se / sw.max(1e-300)).sqrt()))
+    // Residual variance per unit weight (at least that of a 0.05 px scatter).
+    let det = s0 * s2 - s1 * s1;
+    let dof = (n as f64 - 2.0).max(1.0);
+    let var0 = su.max(0.05f64.powi(2) * sw) / dof;
+    let sd = |u: f64| {
+        (var0 * (s2 - 2.0 * u * s1 + u * u * s0) / det)
+            .max(0.0)
+            .sqrt()
+    };
+    Some(LineFit {
+        line,
+        inliers: n,
+        rms_px: (se / sw.max(1e-300)).sqrt(),
+        sigma_u: [sd(0.0), sd(1.0)],
+    })
 }
 
 /// Finds the bars' slant in the strip `h` (unit square → image, long edges fitted,
@@ -387,6 +419,10 @@ pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<End
     // About one line per pixel across the strip (at most 32: enough samples on a
     // wide strip, and the cost stays bounded).
     let lines = (((V_RANGE.1 - V_RANGE.0) * wid_px).round() as usize).clamp(BANDS, 32);
+    let px_per_u = |u: f64| {
+        let (p, q) = (h.apply([u - 0.01, 0.5]), h.apply([u + 0.01, 0.5]));
+        dist(p, q) / 0.02
+    };
     let mut s = Slant { a: 0.0, b: 0.0 };
     let passes = [(max_slant_px, 0.5), (1.5, 0.05)];
     let mut last = (0, f64::NAN);
@@ -408,7 +444,7 @@ pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<End
                 ws.len()
             ));
         }
-        let Some((d, inliers, rms)) = fit_line(&ws) else {
+        let Some(fit) = fit_line(&ws) else {
             return Err("the bars' direction is not clearly seen (windows disagree)".into());
         };
         let span = {
@@ -416,22 +452,30 @@ pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<End
             us.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
                 - us.iter().cloned().fold(f64::INFINITY, f64::min)
         };
-        if inliers < 4 || span < 0.3 {
+        // Seen over enough of the strip that the slant carries to both ends: a
+        // third of it, or a tenth when the line's scatter predicts the ends to
+        // 0.25 px.
+        let sigma_px = [
+            fit.sigma_u[0] * px_per_u(0.0),
+            fit.sigma_u[1] * px_per_u(1.0),
+        ];
+        let carries = span >= 0.3 || (span >= 0.1 && sigma_px.iter().all(|v| *v <= 0.25));
+        if fit.inliers < 4 || !carries {
             return Err(format!(
-                "the bars' direction is seen over too little of the strip ({inliers} windows over {:.0} %)",
-                100.0 * span
+                "the bars' direction is seen over too little of the strip ({} windows over {:.0} %; \
+                 ends predicted to ±{:.2} / ±{:.2} px)",
+                fit.inliers,
+                100.0 * span,
+                sigma_px[0],
+                sigma_px[1]
             ));
         }
         s = Slant {
-            a: s.a + d.a,
-            b: s.b + d.b,
+            a: s.a + fit.line.a,
+            b: s.b + fit.line.b,
         };
-        last = (inliers, rms);
+        last = (fit.inliers, fit.rms_px);
     }
-    let px_per_u = |u: f64| {
-        let (p, q) = (h.apply([u - 0.01, 0.5]), h.apply([u + 0.01, 0.5]));
-        dist(p, q) / 0.02
-    };
     let slant_px = [s.at(0.0) * px_per_u(0.0), s.at(1.0) * px_per_u(1.0)];
     if slant_px
         .iter()
