@@ -7,7 +7,9 @@
 //!
 //! `-- --refine --shots 40` instead checks `--roi` refinement: the main sweep's
 //! MTF RMS with exact and ±5 px corners, without and with refinement, for the
-//! target frame's corners (with the target) and one strip's (without).
+//! target frame's corners (with the target) and one strip's (without), and how
+//! far the refined strip's ends are slanted from the printed bars; `--sweep 2`
+//! scores the low-contrast (0.2) sweep instead.
 //!
 //! Run: `cargo run --release --example locate_sweep [-- --shots 200 --seed 7
 //! --min-width 1000 --max-width 1600 --verbose --exact]`. Prints a line per shot
@@ -69,7 +71,8 @@ fn main() {
         .map(|i| Pose::random(&mut rng, (wmin, wmax), seed * 1000 + i as u64))
         .collect();
     if args.iter().any(|a| a == "--refine") {
-        refine_report(&target, &poses, seed, verbose);
+        let which: usize = arg(&args, "--sweep", 0);
+        refine_report(&target, &poses, seed, which, verbose);
         return;
     }
     let mut outcomes = Vec::new();
@@ -195,22 +198,34 @@ fn report(outcomes: &[Outcome]) {
 
 /// `--refine`: MTF RMS of the main sweep with exact and ±5 px corners, without and
 /// with `--roi` refinement, for the target frame's corners and a single strip's.
-fn refine_report(target: &sweepmtf::target::Target, poses: &[Pose], seed: u64, verbose: bool) {
+fn refine_report(
+    target: &sweepmtf::target::Target,
+    poses: &[Pose],
+    seed: u64,
+    which: usize,
+    verbose: bool,
+) {
     println!(
-        "| corners | shots | exact | exact, refined | ±5 px | ±5 px, refined | refined corner error max | fell back |"
+        "scored on sweep '{}' (contrast {})",
+        target.sweeps[which].id, target.sweeps[which].contrast
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!(
+        "| corners | shots | exact | exact, refined | ±5 px | ±5 px, refined | ±5 px refined − exact | refined corner error max | ends' slant max | fell back |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut refine_times = Vec::new();
     for strip in [false, true] {
         let mut rng = Rng(seed ^ 0xABCD);
-        let mut cols: [Vec<f64>; 5] = Default::default();
+        let mut cols: [Vec<f64>; 7] = Default::default();
+        let mut ms: Vec<f64> = Vec::new();
         let mut fell = 0;
         let mut failed = 0;
         for (i, pose) in poses.iter().enumerate() {
-            match sweep::refine_trial(target, pose, strip, 5.0, &mut rng) {
+            match sweep::refine_trial_on(target, pose, which, strip, 5.0, &mut rng) {
                 Ok(t) => {
                     if verbose || t.jittered_refined > 1.5 * t.exact + 0.002 {
                         println!(
-                            "shot {i:3} {}: exact {:.4} exact+refine {:.4} ±5 {:.4} ±5+refine {:.4}; corners given {:.2} → {:.2} px; {:?}",
+                            "shot {i:3} {}: exact {:.4} exact+refine {:.4} ±5 {:.4} ±5+refine {:.4}; corners given {:.2} → {:.2} px; ends' slant {:+.2} / {:+.2} px; {:?}",
                             if strip { "strip" } else { "target" },
                             t.exact,
                             t.exact_refined,
@@ -218,9 +233,12 @@ fn refine_report(target: &sweepmtf::target::Target, poses: &[Pose], seed: u64, v
                             t.jittered_refined,
                             t.given_err_px,
                             t.refined_err_px,
+                            t.ends_slant_px[0],
+                            t.ends_slant_px[1],
                             t.notes
                         );
                     }
+                    ms.push(t.refine_ms);
                     if t.notes.iter().any(|n| n.contains("as given")) {
                         fell += 1;
                     }
@@ -230,6 +248,8 @@ fn refine_report(target: &sweepmtf::target::Target, poses: &[Pose], seed: u64, v
                         t.jittered,
                         t.jittered_refined,
                         t.refined_err_px,
+                        t.jittered_refined - t.exact,
+                        t.ends_slant_px[0].abs().max(t.ends_slant_px[1].abs()),
                     ]) {
                         c.push(if v.is_nan() { f64::INFINITY } else { v });
                     }
@@ -242,7 +262,7 @@ fn refine_report(target: &sweepmtf::target::Target, poses: &[Pose], seed: u64, v
         }
         let cell = |v: &mut Vec<f64>| format!("{:.4} / {:.4}", pct(v, 0.5), pct(v, 1.0));
         println!(
-            "| {} | {}{} | {} | {} | {} | {} | {:.2} px | {fell} |",
+            "| {} | {}{} | {} | {} | {} | {} | {} | {:.2} px | {} | {fell} |",
             if strip {
                 "one strip, no target"
             } else {
@@ -258,8 +278,24 @@ fn refine_report(target: &sweepmtf::target::Target, poses: &[Pose], seed: u64, v
             cell(&mut cols[1]),
             cell(&mut cols[2]),
             cell(&mut cols[3]),
+            cell(&mut cols[5]),
             pct(&mut cols[4], 1.0),
+            if strip {
+                format!("{:.2} px", pct(&mut cols[6], 1.0))
+            } else {
+                "–".to_string()
+            },
+        );
+        refine_times.push((strip, pct(&mut ms, 0.5), pct(&mut ms, 1.0)));
+    }
+    println!(
+        "(MTF RMS of the main sweep against the truth over 0.01–0.45 cy/px: median / max; \
+         ends' slant: px along the strip between an end's two refined corners and the printed bar, by the simulator's exact corners)"
+    );
+    for (strip, med, max) in refine_times {
+        println!(
+            "refine_roi ({}): {med:.1} ms median, {max:.1} ms max",
+            if strip { "strip" } else { "target" }
         );
     }
-    println!("(MTF RMS of the main sweep against the truth over 0.01–0.45 cy/px: median / max)");
 }

@@ -7,7 +7,7 @@
 //! centre corrected), and the homography target mm → image px follows. When
 //! one mark is hidden, the chart is solved from three marks and the target's
 //! straight edges. [`refine_roi`] refines user-given corners to the edges of a
-//! strip or target.
+//! strip or target (a strip's ends to its printed bars, [`strip_ends`]).
 //!
 //! Pipeline: [`downscale`] → [`blobs`] → [`assign`] → [`ellipse`] → (when a
 //! mark is hidden) [`refine`].
@@ -19,6 +19,7 @@ pub mod downscale;
 pub mod ellipse;
 pub mod refine;
 pub mod sample;
+pub mod strip_ends;
 
 use crate::geometry::{Homography, Point};
 use crate::photo::Plane;
@@ -234,7 +235,8 @@ fn not_found(target: &Target, candidates: Vec<Candidate>) -> LocateError {
 /// With `target`, the corners are the target frame's (0,0), (w,0), (w,h), (0,h) and
 /// every straight edge of its sweeps, patches and grey patches is used (each with
 /// the polarity the target gives it); without, the corners are those of one strip:
-/// its long edges are refined and its ends are moved inward by `search_px`.
+/// its long edges are refined, its ends are moved inward by `search_px` and turned
+/// along the printed bars ([`strip_ends`]; an error when the bars are not clearly seen).
 /// Errors (edges not clearly seen, ambiguous, or corners that would move further
 /// than `search_px` allows) leave the caller to use the corners as given.
 pub fn refine_roi(

@@ -4,7 +4,9 @@
 //! the image for the strongest gradient of the edge's polarity (sub-pixel by
 //! a parabola through the peak); the homography is then fitted to all of
 //! them (plus any fixed point correspondences, e.g. seen fiducials) by robust
-//! Gauss–Newton on the point-to-line distances in pixels.
+//! Gauss–Newton on the point-to-line distances in pixels. A single strip's ends
+//! have no reliable edge; they are turned along the printed bars afterwards
+//! ([`super::strip_ends`]).
 
 use super::LocateError;
 use super::sample::Gray;
@@ -445,6 +447,61 @@ fn keep_straight(edges: Vec<EdgeObs>, min_pts: usize) -> Vec<EdgeObs> {
         .collect()
 }
 
+/// Like [`keep_straight`], but a segment whose points are not within 1 px RMS of
+/// one line first loses its farthest points (down to half of them, at least
+/// `min_pts`): a strip's long edge has weak stretches where its bright bars meet a
+/// bright surround, and an edge point there may lock onto something else.
+fn keep_straight_trimmed(edges: Vec<EdgeObs>, min_pts: usize) -> Vec<EdgeObs> {
+    let mut out = Vec::new();
+    let mut done = vec![false; edges.len()];
+    for i in 0..edges.len() {
+        if done[i] {
+            continue;
+        }
+        let mut same: Vec<EdgeObs> = Vec::new();
+        for j in i..edges.len() {
+            if edges[j].a == edges[i].a && edges[j].b == edges[i].b {
+                done[j] = true;
+                same.push(edges[j]);
+            }
+        }
+        let floor = min_pts.max(same.len() / 2);
+        while same.len() >= floor.max(2) {
+            let pts: Vec<Point> = same.iter().map(|o| o.p).collect();
+            if line_rms(&pts) <= 1.0 {
+                if same.len() >= min_pts {
+                    out.extend(same.iter().copied());
+                }
+                break;
+            }
+            // Drop the point farthest from the total-least-squares line.
+            let n = pts.len() as f64;
+            let (mx, my) = (
+                pts.iter().map(|p| p[0]).sum::<f64>() / n,
+                pts.iter().map(|p| p[1]).sum::<f64>() / n,
+            );
+            let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+            for p in &pts {
+                let (dx, dy) = (p[0] - mx, p[1] - my);
+                sxx += dx * dx;
+                syy += dy * dy;
+                sxy += dx * dy;
+            }
+            // Direction of the line: the scatter matrix's major axis.
+            let ang = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+            let nrm = [-ang.sin(), ang.cos()];
+            let worst = (0..pts.len())
+                .max_by(|&a, &b| {
+                    let d = |p: Point| ((p[0] - mx) * nrm[0] + (p[1] - my) * nrm[1]).abs();
+                    d(pts[a]).total_cmp(&d(pts[b]))
+                })
+                .expect("non-empty");
+            same.swap_remove(worst);
+        }
+    }
+    out
+}
+
 /// See [`super::refine_roi`].
 pub fn refine_roi(
     plane: &Plane,
@@ -508,13 +565,14 @@ pub fn refine_roi(
             }
             seen_edges = edges.clone();
         } else {
-            edges = keep_straight(edges, 6);
+            edges = keep_straight_trimmed(edges, 6);
             seen_edges = edges.clone();
             // A long side whose edge is not clearly seen keeps the user's line. The ends
             // are not searched (a sweep's low-frequency end starts at a bright peak, its
             // high-frequency end fades to grey, and the target's border may lie just
             // beyond): they keep the user's lines moved inward by the search range, so
-            // that no surround is measured as sweep.
+            // that no surround is measured as sweep, and are turned along the printed
+            // bars at the end (`strip_ends`).
             let mut seen = 0;
             for i in 0..4 {
                 let (sa, sb) = (src[i], src[(i + 1) % 4]);
@@ -555,7 +613,15 @@ pub fn refine_roi(
         }
         h = fit_homography(h, &edges, &[]);
     }
-    let out = src.map(|p| h.apply(p));
+    let mut out = src.map(|p| h.apply(p));
+    // Corners off by up to `search_px` slant an end by up to about twice that.
+    let max_slant = 2.0 * search_px + 4.0;
+    if target.is_none() {
+        // The ends kept the user's (slanted) lines: turn them along the printed bars.
+        let fit = super::strip_ends::align_ends(&full, &h, max_slant)
+            .map_err(|m| LocateError::Refine(format!("strip ends: {m}")))?;
+        out = fit.corners;
+    }
     check_quad(&out).map_err(|e| LocateError::Refine(e.to_string()))?;
     // The seen edges must lie on the refined lines; else they were not one clear edge each.
     let rms = (seen_edges
@@ -574,8 +640,14 @@ pub fn refine_roi(
         .zip(&corners)
         .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
         .fold(0.0, f64::max);
-    // (A strip's ends are also moved inward by the search range on purpose.)
-    let trim = if target.is_none() { search_px } else { 0.0 };
+    // (A strip's ends are also moved inward by the search range on purpose, and
+    // turned along the bars about their centres: each end corner slides along its
+    // long edge by up to half the largest slant.)
+    let trim = if target.is_none() {
+        search_px + 0.5 * max_slant
+    } else {
+        0.0
+    };
     let limit = std::f64::consts::SQRT_2 * search_px + 2.0 + trim;
     if moved > limit {
         return fail(format!(

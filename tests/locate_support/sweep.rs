@@ -371,7 +371,7 @@ pub struct RefineTrial {
     pub exact: f64,
     /// RMS: exact corners, refined.
     pub exact_refined: f64,
-    /// RMS: jittered corners, no refinement.
+    /// RMS: jittered corners, no refinement (NaN when that measurement fails).
     pub jittered: f64,
     /// RMS: jittered corners, refined.
     pub jittered_refined: f64,
@@ -381,9 +381,16 @@ pub struct RefineTrial {
     pub refined_err_px: f64,
     /// Warnings of the refined jittered run that mention the region.
     pub notes: Vec<String>,
+    /// Slant of the refined region's two ends against the printed bars: how far
+    /// (px along the strip) the end's v = 1 corner lies beyond the bar through its
+    /// v = 0 corner, by the simulator's exact strip corners (strip trials; else 0).
+    pub ends_slant_px: [f64; 2],
+    /// Time of the refinement alone (`locate::refine_roi` on the luminance plane of
+    /// the region's bounding box + 16 px, as `measure` converts it), ms.
+    pub refine_ms: f64,
 }
 
-/// Runs one refinement trial (see [`RefineTrial`]).
+/// Runs one refinement trial on the main sweep (see [`RefineTrial`]).
 pub fn refine_trial(
     target: &Target,
     pose: &Pose,
@@ -391,10 +398,24 @@ pub fn refine_trial(
     off_px: f64,
     rng: &mut Rng,
 ) -> Result<RefineTrial, String> {
+    refine_trial_on(target, pose, 0, strip, off_px, rng)
+}
+
+/// Runs one refinement trial scored on the target's `sweep`-th sweep (with `strip`,
+/// that sweep's strip is the region).
+pub fn refine_trial_on(
+    target: &Target,
+    pose: &Pose,
+    sweep: usize,
+    strip: bool,
+    off_px: f64,
+    rng: &mut Rng,
+) -> Result<RefineTrial, String> {
     let (shot, jpeg) = shoot(target, pose)?;
     let dec = decode_bytes(&jpeg, "shot.jpg").map_err(|e| e.to_string())?;
+    let truth = shot.sweeps.get(sweep).ok_or("no such sweep")?;
     let flat = if strip {
-        shot.sweeps[0].roi
+        truth.roi
     } else {
         shot.target_corners
     };
@@ -414,18 +435,53 @@ pub fn refine_trial(
         };
         measure_decoded(&dec, "shot.jpg", t, &o).map_err(|e| e.to_string())
     };
-    let id = if strip { "strip" } else { "main" };
-    let truth = &shot.sweeps[0];
+    let id = if strip { "strip" } else { truth.id.as_str() };
     let err = |a: &[[f64; 2]; 4]| {
         (0..4)
             .map(|k| (a[k][0] - exact[k][0]).hypot(a[k][1] - exact[k][1]))
             .fold(0.0, f64::max)
     };
     let refined = measure(given, true)?;
+    let refine_ms = {
+        use sweepmtf::photo::linearise::{Channel, Crop, default_tone, planes};
+        let pad = sweepmtf::measure::REFINE_SEARCH_PX + 8.0;
+        let lo = |a: usize| {
+            (given.iter().map(|p| p[a]).fold(f64::INFINITY, f64::min) - pad).max(0.0) as usize
+        };
+        let hi = |a: usize, n: usize| {
+            ((given.iter().map(|p| p[a]).fold(0.0, f64::max) + pad).ceil() as usize).min(n)
+        };
+        let crop = Crop {
+            x0: lo(0),
+            y0: lo(1),
+            x1: hi(0, dec.width),
+            y1: hi(1, dec.height),
+        };
+        let grey = planes(&dec, crop, &default_tone(dec.bits()).0, Channel::Luma);
+        let t0 = Instant::now();
+        let _ =
+            sweepmtf::locate::refine_roi(&grey[0], given, t, sweepmtf::measure::REFINE_SEARCH_PX);
+        t0.elapsed().as_secs_f64() * 1e3
+    };
+    // The refined corners in the true strip frame (unit square): a slant is a u difference.
+    let ends_slant_px = if strip {
+        let unit = rect_corners(0.0, 0.0, 1.0, 1.0);
+        let to_true =
+            sweepmtf::geometry::Homography::from_quads(&exact, &unit).map_err(|e| e.to_string())?;
+        let q = refined.roi.map(|p| to_true.apply(p));
+        let len = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+        let px = 0.5 * (len(exact[0], exact[1]) + len(exact[3], exact[2]));
+        [(q[3][0] - q[0][0]) * px, (q[2][0] - q[1][0]) * px]
+    } else {
+        [0.0, 0.0]
+    };
     Ok(RefineTrial {
         exact: curve_rms(&measure(exact, false)?, truth, id),
         exact_refined: curve_rms(&measure(exact, true)?, truth, id),
-        jittered: curve_rms(&measure(given, false)?, truth, id),
+        // Corners given off may leave too little sweep to measure: NaN, not a failed trial.
+        jittered: measure(given, false)
+            .map(|m| curve_rms(&m, truth, id))
+            .unwrap_or(f64::NAN),
         jittered_refined: curve_rms(&refined, truth, id),
         given_err_px: err(&given),
         refined_err_px: err(&refined.roi),
@@ -435,5 +491,7 @@ pub fn refine_trial(
             .filter(|w| w.contains("region"))
             .cloned()
             .collect(),
+        ends_slant_px,
+        refine_ms,
     })
 }
