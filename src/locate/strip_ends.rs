@@ -71,7 +71,41 @@ struct Bands {
     du: f64,
 }
 
-fn sample_bands(g: &Gray<'_>, h: &Homography, n: usize, lines: usize, s: Slant) -> Bands {
+/// Window `w` of a grid of `n` samples: its range (a, z) and the centre part
+/// (i0, i1) of at most [`WIN_MAX`] samples that is searched.
+fn window_range(w: usize, n: usize) -> (usize, usize, usize, usize) {
+    let len = 2 * n / (WINDOWS + 1);
+    let start = w * len / 2;
+    let (a, z) = (start, (start + len).min(n));
+    let cut = (z - a).saturating_sub(WIN_MAX) / 2;
+    (a, z, a + cut, z - cut)
+}
+
+/// Which grid samples the search of `windows` reads, shifts of up to
+/// ±`range_px` across the strip included (a bound: |v − ½| ≤ ½).
+fn needed(h: &Homography, n: usize, windows: &[usize], range_px: f64) -> Vec<bool> {
+    let du = 1.0 / (n - 1) as f64;
+    let mut keep = vec![false; n];
+    for &w in windows {
+        let (a, z, i0, i1) = window_range(w, n);
+        let uc = (a + z) as f64 * 0.5 * du;
+        let (p, q) = (h.apply([uc - 0.01, 0.5]), h.apply([uc + 0.01, 0.5]));
+        let px_per_u = (q[0] - p[0]).hypot(q[1] - p[1]) / 0.02;
+        let reach = (0.5 * range_px / (px_per_u * du)).ceil() as usize + 3;
+        keep[i0.saturating_sub(reach)..(i1 + reach).min(n)].fill(true);
+    }
+    keep
+}
+
+/// Samples the bands where `keep` says (NaN elsewhere).
+fn sample_bands(
+    g: &Gray<'_>,
+    h: &Homography,
+    n: usize,
+    lines: usize,
+    s: Slant,
+    keep: &[bool],
+) -> Bands {
     let du = 1.0 / (n - 1) as f64;
     let bands = BANDS.min(lines);
     let level = |j: usize| V_RANGE.0 + (V_RANGE.1 - V_RANGE.0) * (j as f64 + 0.5) / lines as f64;
@@ -83,6 +117,10 @@ fn sample_bands(g: &Gray<'_>, h: &Homography, n: usize, lines: usize, s: Slant) 
             for &j in &mine {
                 let v = level(j);
                 for (i, acc) in row.iter_mut().enumerate() {
+                    if !keep[i] {
+                        *acc = f64::NAN;
+                        continue;
+                    }
                     let u0 = i as f64 * du;
                     let p = h.apply([u0 + (v - 0.5) * s.at(u0), v]);
                     *acc += g.at_img(p).unwrap_or(f64::NAN);
@@ -115,9 +153,9 @@ struct WinSlant {
     freq_cy_px: f64,
 }
 
-/// Energy of the bands' sum over grid indices `i0..i1` with each band shifted by
-/// `dv·d` (d in grid steps), each band's window mean removed.
-fn energy(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 {
+/// Energy of the bands' sum over grid indices `i0..i1` (every `stride`-th) with
+/// each band shifted by `dv·d` (d in grid steps), each band's window mean removed.
+fn energy(b: &Bands, means: &[f64], (i0, i1, stride): (usize, usize, usize), d: f64) -> f64 {
     let mut e = 0.0;
     let shifts: Vec<(usize, f64)> =
         b.dv.iter()
@@ -127,7 +165,7 @@ fn energy(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 {
                 (f as isize as usize, x - f)
             })
             .collect();
-    for i in i0..i1 {
+    for i in (i0..i1).step_by(stride) {
         let mut acc = 0.0;
         for (g, &(k, f)) in shifts.iter().enumerate() {
             let j = i.wrapping_add(k);
@@ -139,12 +177,19 @@ fn energy(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 {
     e
 }
 
-/// Energy the bands' sum would have with no alignment at all (no cross terms).
-fn incoherent(b: &Bands, means: &[f64], i0: usize, i1: usize) -> f64 {
+/// Energy the bands' sum would have with no alignment at all (no cross terms),
+/// over the same samples as [`energy`].
+fn incoherent(b: &Bands, means: &[f64], (i0, i1, stride): (usize, usize, usize)) -> f64 {
     b.prof
         .iter()
         .zip(means)
-        .map(|(p, m)| p[i0..i1].iter().map(|v| (v - m).powi(2)).sum::<f64>())
+        .map(|(p, m)| {
+            p[i0..i1]
+                .iter()
+                .step_by(stride)
+                .map(|v| (v - m).powi(2))
+                .sum::<f64>()
+        })
         .sum()
 }
 
@@ -176,7 +221,7 @@ fn dominant_freq(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 
         .collect();
     // Frequencies from 1.5 cycles per window to a quarter of the grid rate.
     let (lo, hi) = (1.5 / n as f64, 0.25);
-    let steps = 240;
+    let steps = 96;
     let mut best = (0.0, lo);
     for k in 0..=steps {
         let f = lo + (hi - lo) * k as f64 / steps as f64;
@@ -213,15 +258,11 @@ fn window_slants(
     freq: bool,
 ) -> Vec<WinSlant> {
     let n = b.prof[0].len();
-    let len = 2 * n / (WINDOWS + 1);
     let dv_max = b.dv.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let all: Vec<usize> = (0..WINDOWS).collect();
     let one = |&w: &usize| -> Option<WinSlant> {
         // The window's centre part of at most WIN_MAX samples (long strips have plenty).
-        let start = w * len / 2;
-        let (a, z) = (start, (start + len).min(n));
-        let cut = (z - a).saturating_sub(WIN_MAX) / 2;
-        let (i0, i1) = (a + cut, z - cut);
+        let (a, z, i0, i1) = window_range(w, n);
         let uc = (a + z) as f64 * 0.5 * b.du;
         let px_per_u = {
             let (p, q) = (h.apply([uc - 0.01, 0.5]), h.apply([uc + 0.01, 0.5]));
@@ -244,10 +285,13 @@ fn window_slants(
             .iter()
             .map(|p| p[i0..i1].iter().sum::<f64>() / (i1 - i0) as f64)
             .collect();
-        let inc = incoherent(b, &means, i0, i1).max(1e-300);
+        // The wide first search reads every other sample (0.5 px apart, still
+        // over 4 per period below aliasing); the fine one reads them all.
+        let span = (i0, i1, if only.is_none() { 2 } else { 1 });
+        let inc = incoherent(b, &means, span).max(1e-300);
         let m = (range_px / step_px).round() as i64;
         let es: Vec<f64> = (-m..=m)
-            .map(|k| energy(b, &means, i0, i1, k as f64 * step_px * steps_per_px) / inc)
+            .map(|k| energy(b, &means, span, k as f64 * step_px * steps_per_px) / inc)
             .collect();
         let (k, &emax) = es.iter().enumerate().max_by(|x, y| x.1.total_cmp(y.1))?;
         // The bands must line up clearly (more than twice the energy of no alignment)...
@@ -424,12 +468,14 @@ pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<End
         dist(p, q) / 0.02
     };
     let mut s = Slant { a: 0.0, b: 0.0 };
-    let passes = [(max_slant_px, 0.5), (1.5, 0.05)];
+    let passes = [(max_slant_px, 0.5), (1.5, 0.25)];
     let mut last = (0, f64::NAN);
     // The windows below aliasing, chosen in the first pass.
     let mut chosen: Option<Vec<usize>> = None;
     for &(range, step) in &passes {
-        let bands = sample_bands(g, h, n, lines, s);
+        let all: Vec<usize> = (0..WINDOWS).collect();
+        let keep = needed(h, n, chosen.as_deref().unwrap_or(&all), range);
+        let bands = sample_bands(g, h, n, lines, s, &keep);
         let ws = match &chosen {
             None => {
                 let ws = below_aliasing(window_slants(&bands, h, range, step, None, true));
