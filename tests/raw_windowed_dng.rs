@@ -6,7 +6,9 @@
 //! border, per-site black levels, BlackLevelDeltaH/V and an orientation.
 //! Every sample, level and fact must agree; a window must hold exactly the
 //! whole decode's samples inside it and nothing outside; damaged tiled
-//! files must be errors naming the file.
+//! files must be errors naming the file; and `measure_raw` with corners
+//! given, which decodes only the region's window, meets the bar against the
+//! simulator's truth with a preview that equals the simulator's mosaic.
 
 use std::path::{Path, PathBuf};
 use sweepmtf::photo::raw::{
@@ -209,4 +211,103 @@ fn damaged_tiled_dngs_are_errors_naming_the_file() {
         assert!(e.to_string().contains("garbled.dng"), "{e}");
     }
     assert_eq!(seen, 3);
+}
+
+/// RMS |MTF − truth| of the measured curve `id` over the green lattice's unaliased band.
+fn green_rms(
+    m: &sweepmtf::measure::Measurement,
+    truth: &sweepmtf::simulate::SweepTruth,
+    id: &str,
+) -> f64 {
+    let rows: Vec<(f64, f64)> = truth.rows.iter().map(|r| (r.freq_cy_px, r.mtf)).collect();
+    let at = |f: f64| {
+        let i = rows.partition_point(|p| p.0 < f).clamp(1, rows.len() - 1);
+        let (a, b) = (rows[i - 1], rows[i]);
+        a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
+    };
+    let c = m.curves.iter().find(|c| c.sweep_id == id).expect("curve");
+    let e: Vec<f64> = c
+        .points
+        .iter()
+        .filter(|p| !p.aliased && (0.01..=0.24).contains(&p.freq_cy_px))
+        .map(|p| p.mtf - at(p.freq_cy_px))
+        .collect();
+    assert!(e.len() > 20, "{} points", e.len());
+    (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt()
+}
+
+#[test]
+fn a_region_measures_from_its_window_alone_within_the_bar() {
+    use sweepmtf::measure::{MeasureOptions, measure_raw};
+    use sweepmtf::photo::linearise::Channel;
+    use sweepmtf::simulate::{self, Camera, demo::demo_target};
+    use sweepmtf::target::SweepLaw;
+    let target = demo_target(SweepLaw::Log);
+    let camera = Camera {
+        bayer: Some(BayerOrder::Rggb),
+        ..Camera::noiseless(1200, 800)
+    };
+    let shot = simulate::render(&target, &sweepmtf::model::System::default(), &camera).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let quad = |q: [f64; 8]| [[q[0], q[1]], [q[2], q[3]], [q[4], q[5]], [q[6], q[7]]];
+    for (name, settings) in [
+        ("plain.dng", DngSettings::default()),
+        (
+            "tiles.dng",
+            DngSettings {
+                lossless_jpeg: true,
+                tile_px: 64,
+                ..DngSettings::default()
+            },
+        ),
+    ] {
+        let bytes =
+            encode_mosaic(&shot.linear, 1200, 800, BayerOrder::Rggb, 4.3, &settings).unwrap();
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        // The strip alone (no target, refined ends) and the target frame's corners.
+        for (roi, t, id) in [
+            (quad(shot.roi().unwrap()), None, "strip"),
+            (
+                quad(shot.target_corners),
+                Some(&target),
+                shot.sweeps[0].id.as_str(),
+            ),
+        ] {
+            let opts = MeasureOptions {
+                roi: Some(roi),
+                refine_roi: true,
+                channel: Channel::G,
+                ..MeasureOptions::default()
+            };
+            let m = measure_raw(&p, name, t, &opts).unwrap();
+            let rms = green_rms(&m, &shot.sweeps[0], id);
+            eprintln!("{name} {id}: RMS {rms:.5}");
+            assert!(rms <= 0.005, "{name} {id}: RMS {rms}");
+            // Every preview pixel was decoded (a sample outside the window would
+            // read 0 DN and show black): each equals the simulator's mosaic there.
+            let pv = &m.preview;
+            let srgb = |v: f64| {
+                let v = v.clamp(0.0, 1.0);
+                let c = if v <= 0.0031308 {
+                    12.92 * v
+                } else {
+                    1.055 * v.powf(1.0 / 2.4) - 0.055
+                };
+                255.0 * c
+            };
+            for j in 0..pv.height {
+                for i in 0..pv.width {
+                    let x = (pv.x0 + i as f64 * pv.scale) as usize;
+                    let y = (pv.y0 + j as f64 * pv.scale) as usize;
+                    let want = srgb(shot.linear[y * 1200 + x] as f64);
+                    let got = pv.rgb[3 * (j * pv.width + i)] as f64;
+                    assert!(
+                        (got - want).abs() <= 2.5,
+                        "{name} {id}: preview ({x}, {y}) is {got}, the mosaic says {want:.1}"
+                    );
+                }
+            }
+        }
+    }
 }
