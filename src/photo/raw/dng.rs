@@ -488,8 +488,9 @@ thread_local! {
     };
 }
 
-/// Scratch capacity (elements) kept per thread between decodes.
-const SCRATCH_KEEP: usize = 4 << 20;
+/// Scratch capacity (elements) kept per thread between decodes: enough for
+/// common strips and tiles (a 16-row strip of 6000 px is 96 k samples).
+const SCRATCH_KEEP: usize = 1 << 20;
 
 /// Rows of an uncompressed unit decoded per task.
 const PACKED_ROWS: usize = 64;
