@@ -253,6 +253,16 @@ fn frame_of(
     if width == 0 || height == 0 || !(1..=16).contains(&bits) || sample_format != 1 {
         return rawler("not 1–16-bit unsigned samples");
     }
+    // No camera makes a gigasample frame: a header saying so is damaged.
+    if width
+        .checked_mul(height)
+        .and_then(|n| n.checked_mul(spp))
+        .is_none_or(|n| n > 1 << 30)
+    {
+        return Err(corrupt(format!(
+            "an implausible image size ({width}×{height}×{spp} samples)"
+        )));
+    }
     if raw.has_entry(TiffCommonTag::Linearization)
         || usize_at(raw, DngTag::RowInterleaveFactor, 0).unwrap_or(1) != 1
         || usize_at(raw, DngTag::ColumnInterleaveFactor, 0).unwrap_or(1) != 1
