@@ -34,11 +34,24 @@ struct Comp {
 /// and to the local white level) and of a 2× coarser copy (where small rings fill in
 /// to solid blobs), each tested for being a fiducial (image px), without duplicates.
 pub fn find_candidates(g: &Gray<'_>) -> Vec<Candidate> {
-    let mut out = find_candidates_one(g, &dark_mask(g));
-    merge(&mut out, find_candidates_one(g, &dark_mask_white(g)));
-    if g.w.min(g.h) >= 200 {
-        let coarse = super::downscale::box_reduce(g, 2);
-        merge(&mut out, find_candidates_one(&coarse, &dark_mask(&coarse)));
+    // The three searches are independent (run in parallel); merged in a fixed order.
+    let ((mut out, white), coarse) = rayon::join(
+        || {
+            rayon::join(
+                || find_candidates_one(g, &dark_mask(g)),
+                || find_candidates_one(g, &dark_mask_white(g)),
+            )
+        },
+        || {
+            (g.w.min(g.h) >= 200).then(|| {
+                let coarse = super::downscale::box_reduce(g, 2);
+                find_candidates_one(&coarse, &dark_mask(&coarse))
+            })
+        },
+    );
+    merge(&mut out, white);
+    if let Some(coarse) = coarse {
+        merge(&mut out, coarse);
     }
     mark_crowded(&mut out);
     out

@@ -158,8 +158,11 @@ pub fn search(plane: &Plane, target: &Target) -> Result<Search, LocateError> {
         return Err(LocateError::TooSmall(plane.width, plane.height));
     }
     let small = downscale::reduce_for_search(plane);
-    let mut candidates = blobs::find_candidates(&small);
-    let pattern = assign::Pattern::new(target);
+    // The blobs and the target's pattern do not depend on each other.
+    let (mut candidates, pattern) = rayon::join(
+        || blobs::find_candidates(&small),
+        || assign::Pattern::new(target),
+    );
     let picks = assign::choose(&small, target, &pattern, &candidates);
     let mut charts = Vec::new();
     for pick in picks {
