@@ -156,25 +156,37 @@ struct WinSlant {
 /// Energy of the bands' sum over grid indices `i0..i1` (every `stride`-th) with
 /// each band shifted by `dv·d` (d in grid steps), each band's window mean removed.
 fn energy(b: &Bands, means: &[f64], (i0, i1, stride): (usize, usize, usize), d: f64) -> f64 {
-    let mut e = 0.0;
-    let shifts: Vec<(usize, f64)> =
-        b.dv.iter()
-            .map(|dv| {
-                let x = dv * d;
-                let f = x.floor();
-                (f as isize as usize, x - f)
-            })
-            .collect();
-    for i in (i0..i1).step_by(stride) {
-        let mut acc = 0.0;
-        for (g, &(k, f)) in shifts.iter().enumerate() {
+    let shifts = band_shifts(b, d);
+    (i0..i1)
+        .step_by(stride)
+        .map(|i| aligned_sum(b, means, &shifts, i).powi(2))
+        .sum()
+}
+
+/// Each band's shift `dv·d` (d in grid steps) as whole steps (wrapping for
+/// negative shifts) and the fraction of a step.
+fn band_shifts(b: &Bands, d: f64) -> Vec<(usize, f64)> {
+    b.dv.iter()
+        .map(|dv| {
+            let x = dv * d;
+            let f = x.floor();
+            (f as isize as usize, x - f)
+        })
+        .collect()
+}
+
+/// The bands' sum at grid index `i`, each band shifted by `shifts` (linear
+/// interpolation) and its window mean removed.
+fn aligned_sum(b: &Bands, means: &[f64], shifts: &[(usize, f64)], i: usize) -> f64 {
+    shifts
+        .iter()
+        .enumerate()
+        .map(|(g, &(k, f))| {
             let j = i.wrapping_add(k);
             let p = &b.prof[g];
-            acc += p[j] * (1.0 - f) + p[j + 1] * f - means[g];
-        }
-        e += acc * acc;
-    }
-    e
+            p[j] * (1.0 - f) + p[j + 1] * f - means[g]
+        })
+        .sum()
 }
 
 /// Energy the bands' sum would have with no alignment at all (no cross terms),
@@ -195,28 +207,13 @@ fn incoherent(b: &Bands, means: &[f64], (i0, i1, stride): (usize, usize, usize))
 
 /// Dominant frequency (cycles per grid step) of the bands' sum aligned with shift `d`.
 fn dominant_freq(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 {
-    let shifts: Vec<(usize, f64)> =
-        b.dv.iter()
-            .map(|dv| {
-                let x = dv * d;
-                let f = x.floor();
-                (f as isize as usize, x - f)
-            })
-            .collect();
+    let shifts = band_shifts(b, d);
     let n = i1 - i0;
     let sum: Vec<f64> = (i0..i1)
         .enumerate()
         .map(|(k, i)| {
             let hann = 0.5 - 0.5 * (std::f64::consts::TAU * (k as f64 + 0.5) / n as f64).cos();
-            let v: f64 = shifts
-                .iter()
-                .enumerate()
-                .map(|(g, &(s, f))| {
-                    let j = i.wrapping_add(s);
-                    b.prof[g][j] * (1.0 - f) + b.prof[g][j + 1] * f - means[g]
-                })
-                .sum();
-            v * hann
+            aligned_sum(b, means, &shifts, i) * hann
         })
         .collect();
     // Frequencies from 1.5 cycles per window to a quarter of the grid rate.

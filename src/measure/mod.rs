@@ -273,8 +273,7 @@ pub fn measure_file_each(
     let target = load_target(opts).map_err(err)?.ok_or(err(Failure::NoRoi))?;
     check_options(opts).map_err(err)?;
     let located = |plane: &Plane| {
-        crate::locate::find_charts(plane, &target)
-            .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))
+        crate::locate::find_charts(plane, &target).map_err(|e| err(location_failed(e)))
     };
     if crate::photo::raw::is_raw_path(path) {
         let frame =
@@ -312,6 +311,25 @@ fn name_chart(mut m: Measurement, i: usize, n: usize) -> Measurement {
         m.source = format!("{} [chart {i}]", m.source);
     }
     m
+}
+
+/// The chart `opts.chart_index` picks in `plane` (see [`crate::locate::find_chart`]):
+/// its corners (image px), the search's warnings added to `warnings`.
+fn locate_region(
+    plane: &Plane,
+    target: &Target,
+    opts: &MeasureOptions,
+    warnings: &mut Vec<String>,
+) -> Result<[Point; 4], Failure> {
+    let loc =
+        crate::locate::find_chart(plane, target, opts.chart_index).map_err(location_failed)?;
+    warnings.extend(found_warnings(&loc, 0, 1));
+    Ok(loc.corners_px)
+}
+
+/// The failure of automatic location.
+fn location_failed(e: crate::locate::LocateError) -> Failure {
+    Failure::Region(format!("automatic location failed: {e}"))
 }
 
 /// The warnings of a chart found automatically: the search's own, and which
@@ -383,11 +401,7 @@ pub fn measure_raw(
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
         (None, Some(t)) => {
-            let plane = frame.location_plane();
-            let loc = crate::locate::find_chart(&plane, t, opts.chart_index)
-                .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
-            warnings.extend(found_warnings(&loc, 0, 1));
-            loc.corners_px
+            locate_region(&frame.location_plane(), t, opts, &mut warnings).map_err(err)?
         }
         _ => {
             let given = resolve_roi(opts, frame.width, frame.height).map_err(err)?;
@@ -585,11 +599,7 @@ pub fn measure_decoded(
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
         (None, Some(t)) => {
-            let grey = full_grey(dec);
-            let loc = crate::locate::find_chart(&grey[0], t, opts.chart_index)
-                .map_err(|e| err(Failure::Region(format!("automatic location failed: {e}"))))?;
-            warnings.extend(found_warnings(&loc, 0, 1));
-            loc.corners_px
+            locate_region(&full_grey(dec)[0], t, opts, &mut warnings).map_err(err)?
         }
         _ => {
             let given = resolve_roi(opts, dec.width, dec.height).map_err(err)?;

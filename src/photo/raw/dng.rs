@@ -96,33 +96,18 @@ fn usize_at(ifd: &IFD, tag: impl rawler::tags::TiffTag, i: usize) -> Option<usiz
         .and_then(|e| e.value.get_usize(i).ok().flatten())
 }
 
+/// n / d, NaN for a zero denominator.
+fn ratio(n: f64, d: f64) -> f64 {
+    if d == 0.0 { f64::NAN } else { n / d }
+}
+
 fn f64s(ifd: &IFD, tag: impl rawler::tags::TiffTag) -> Option<Vec<f64>> {
     let e = ifd.get_entry(tag)?;
     let v: Option<Vec<f64>> = match &e.value {
         Value::Short(v) => Some(v.iter().map(|&x| x as f64).collect()),
         Value::Long(v) => Some(v.iter().map(|&x| x as f64).collect()),
-        Value::Rational(v) => Some(
-            v.iter()
-                .map(|r| {
-                    if r.d == 0 {
-                        f64::NAN
-                    } else {
-                        r.n as f64 / r.d as f64
-                    }
-                })
-                .collect(),
-        ),
-        Value::SRational(v) => Some(
-            v.iter()
-                .map(|r| {
-                    if r.d == 0 {
-                        f64::NAN
-                    } else {
-                        r.n as f64 / r.d as f64
-                    }
-                })
-                .collect(),
-        ),
+        Value::Rational(v) => Some(v.iter().map(|r| ratio(r.n as f64, r.d as f64)).collect()),
+        Value::SRational(v) => Some(v.iter().map(|r| ratio(r.n as f64, r.d as f64)).collect()),
         Value::Float(v) => Some(v.iter().map(|&x| x as f64).collect()),
         Value::Double(v) => Some(v.clone()),
         _ => None,
