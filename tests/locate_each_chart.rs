@@ -85,6 +85,27 @@ fn each_chart_of_a_frame_is_measured_against_its_own_truth() {
     }
 }
 
+/// Runs `sweepmtf measure PHOTO EXTRA --target a4_log -o OUT`, which must succeed; its stdout.
+fn measure(photo: &Path, extra: &[&str], out: &Path) -> String {
+    let run = Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .arg("measure")
+        .arg(photo)
+        .args(extra)
+        .arg("--target")
+        .arg(target_path())
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    String::from_utf8_lossy(&run.stdout).into_owned()
+}
+
 #[test]
 fn the_cli_writes_one_set_of_outputs_per_chart_or_the_one_asked_for() {
     // Kept under the target folder to be looked at.
@@ -95,20 +116,7 @@ fn the_cli_writes_one_set_of_outputs_per_chart_or_the_one_asked_for() {
     let (path, _) = two_charts(dir.path());
     std::fs::copy(&path, kept.join("two.png")).unwrap();
     let out = kept.join("out");
-    let run = Command::cargo_bin("sweepmtf")
-        .unwrap()
-        .args(["measure", path.to_str().unwrap(), "--target"])
-        .arg(target_path())
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&run.stdout);
+    let stdout = measure(&path, &[], &out);
     assert_eq!(stdout.lines().count(), 2, "{stdout}");
     for k in 0..2 {
         for suffix in ["mtf.csv", "mtf.png", "roi.png", "summary.json"] {
@@ -119,25 +127,7 @@ fn the_cli_writes_one_set_of_outputs_per_chart_or_the_one_asked_for() {
     assert!(!out.join("two.mtf.csv").exists());
     // --chart-index 1: only the right chart, under the plain stem.
     let one = dir.path().join("one");
-    let run = Command::cargo_bin("sweepmtf")
-        .unwrap()
-        .args([
-            "measure",
-            path.to_str().unwrap(),
-            "--chart-index",
-            "1",
-            "--target",
-        ])
-        .arg(target_path())
-        .arg("-o")
-        .arg(&one)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    measure(&path, &["--chart-index", "1"], &one);
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(one.join("two.summary.json")).unwrap()).unwrap();
     let xs: Vec<f64> = summary["roi_px"]

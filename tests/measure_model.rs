@@ -5,7 +5,8 @@
 use assert_cmd::Command;
 use std::path::{Path, PathBuf};
 
-const SYSTEM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/targets/systems/aps_c_f4.toml");
+mod patch_shot;
+use patch_shot::SYSTEM;
 
 fn cmd() -> Command {
     Command::cargo_bin("sweepmtf").unwrap()
@@ -259,31 +260,16 @@ fn auto_uses_the_exif_f_number() {
 #[test]
 fn patch_model_matches_simulator_patch_truth() {
     let dir = tempfile::tempdir().unwrap();
-    let photo = dir.path().join("shot.png");
-    let target = concat!(env!("CARGO_MANIFEST_DIR"), "/targets/a4_patches.toml");
-    cmd()
-        .args(["simulate", "--target", target, "--system", SYSTEM])
-        .args(["--size", "1500x1100", "--rotate", "20", "-o"])
-        .arg(&photo)
-        .assert()
-        .success();
-    let meta: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.path().join("shot.json")).unwrap()).unwrap();
-    let roi: Vec<String> = meta["target_corners"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| format!("{}", v.as_f64().unwrap()))
-        .collect();
+    let (photo, roi) = patch_shot::shot(dir.path());
     let out = dir.path().join("out");
     cmd()
         .arg("measure")
         .arg(&photo)
         .args([
             "--target",
-            target,
+            patch_shot::TARGET,
             "--roi",
-            &roi.join(","),
+            &roi,
             "--no-refine-roi",
         ])
         .args(["--pixel-pitch", "4.3um", "--model", SYSTEM, "-o"])

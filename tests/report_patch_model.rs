@@ -9,32 +9,11 @@
 use assert_cmd::Command;
 use std::path::{Path, PathBuf};
 
-const SYSTEM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/targets/systems/aps_c_f4.toml");
-const TARGET: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/targets/a4_patches.toml");
+mod patch_shot;
+use patch_shot::{SYSTEM, TARGET, shot};
 
 fn cmd() -> Command {
     Command::cargo_bin("sweepmtf").unwrap()
-}
-
-/// Simulates the A4 patch chart turned 20° (1500×1100 px: 0.07 to 1.7 cy/px);
-/// returns the photo and the target corners.
-fn shot(dir: &Path) -> (PathBuf, String) {
-    let photo = dir.join("shot.png");
-    cmd()
-        .args(["simulate", "--target", TARGET, "--system", SYSTEM])
-        .args(["--size", "1500x1100", "--rotate", "20", "-o"])
-        .arg(&photo)
-        .assert()
-        .success();
-    let meta: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("shot.json")).unwrap()).unwrap();
-    let roi: Vec<String> = meta["target_corners"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| format!("{}", v.as_f64().unwrap()))
-        .collect();
-    (photo, roi.join(","))
 }
 
 /// Runs `measure` with `model` and `--plot svg`; returns stdout.
