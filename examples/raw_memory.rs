@@ -8,6 +8,8 @@
 //! `strip` (`--roi` on the demo target's sweep strip), `corners` (`--roi` =
 //! the target frame's corners, with the target) or `auto` (chart found from
 //! the fiducials). Prints the process's peak RSS (VmHWM) and the wall time.
+//! An optional third argument repeats the case N times (for `perf record`)
+//! and prints the median time as well.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -53,8 +55,41 @@ fn main() {
         channel: Channel::G,
         ..MeasureOptions::default()
     };
-    let t = Instant::now();
-    let what = match mode.as_str() {
+    let repeat: usize = args.next().and_then(|n| n.parse().ok()).unwrap_or(1).max(1);
+    let mut times = Vec::with_capacity(repeat);
+    let mut last = None;
+    for _ in 0..repeat {
+        let t = Instant::now();
+        last = Some(run(&path, &mode, &target, strip, corners, &opts));
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    let ms = times[0];
+    let median = times[times.len() / 2];
+    match last.expect("at least one run") {
+        Ok(w) => println!(
+            "{mode}: {ms:.1} ms (median of {repeat}: {median:.1} ms), peak RSS {:.1} MB ({w})",
+            peak_rss_mb()
+        ),
+        Err(e) => {
+            eprintln!("{e}");
+            std::process::exit(1);
+        }
+    }
+}
+
+/// One run of MODE on PATH: what it found, or the error line.
+fn run(
+    path: &std::path::Path,
+    mode: &str,
+    target: &sweepmtf::target::Target,
+    strip: [[f64; 2]; 4],
+    corners: [[f64; 2]; 4],
+    opts: &dyn Fn(Option<[[f64; 2]; 4]>) -> MeasureOptions,
+) -> Result<String, String> {
+    let path = path.to_path_buf();
+    let target = target.clone();
+    match mode {
         "decode" => decode_raw(&path)
             .map(|f| f.decoder)
             .map_err(|e| e.to_string()),
@@ -71,13 +106,5 @@ fn main() {
             .map(|m| format!("{} curves", m.curves.len()))
             .map_err(|e| e.to_string()),
         other => Err(format!("unknown mode {other}")),
-    };
-    let ms = t.elapsed().as_secs_f64() * 1e3;
-    match what {
-        Ok(w) => println!("{mode}: {ms:.1} ms, peak RSS {:.1} MB ({w})", peak_rss_mb()),
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(1);
-        }
     }
 }

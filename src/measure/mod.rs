@@ -477,19 +477,7 @@ fn measure_frame_at(
     )
     .map_err(err)?;
     drop(groups);
-    // Preview: the first sample of each pixel, through the sRGB curve (a table) for display.
-    const LEVELS: usize = 4096;
-    let srgb: Vec<u8> = (0..LEVELS)
-        .map(|i| {
-            let v = i as f64 / (LEVELS - 1) as f64;
-            (255.0 * crate::photo::linearise::linear_to_srgb(v)).round() as u8
-        })
-        .collect();
-    m.preview = preview_from(&roi, frame.width, frame.height, |x, y| {
-        let v = frame.value(x, y, 0).clamp(0.0, 1.0);
-        let c = srgb[(v * (LEVELS - 1) as f32 + 0.5) as usize];
-        [c, c, c]
-    });
+    m.preview = raw_preview(frame, &roi);
     m.source = name.to_string();
     m.bits = frame.bits_per_sample as u32;
     m.tone = "linear raw (black level removed, white level = 1)".to_string();
@@ -1404,13 +1392,10 @@ fn make_preview(dec: &Decoded, roi: &[Point; 4]) -> Preview {
     })
 }
 
-/// A preview of the region (plus a margin), at most ~1200 px on its long side.
-fn preview_from(
-    roi: &[Point; 4],
-    width: usize,
-    height: usize,
-    pixel: impl Fn(usize, usize) -> [u8; 3],
-) -> Preview {
+/// The image rectangle a preview of the region shows (the region plus a
+/// margin) and its step (image px per preview px, so that the long side is at
+/// most ~1200 px).
+fn preview_window(roi: &[Point; 4], width: usize, height: usize) -> (Crop, usize) {
     let xmin = roi.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
     let xmax = roi.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max);
     let ymin = roi.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
@@ -1419,6 +1404,66 @@ fn preview_from(
     let crop = bbox_crop(roi, width, height, pad);
     let (cw, ch) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
     let step = ((cw.max(ch) as f64 / 1200.0).ceil() as usize).max(1);
+    (crop, step)
+}
+
+/// A raw frame's preview of the region: on a Bayer mosaic one green lattice
+/// (an even step, so every preview pixel is a green site and the picture
+/// shows no CFA checkerboard), otherwise the first sample of each pixel;
+/// through the sRGB curve (a table) for display. Converted a row at a time
+/// in parallel, straight from the decoded samples.
+fn raw_preview(frame: &crate::photo::raw::RawFrame, roi: &[Point; 4]) -> Preview {
+    let (crop, step) = preview_window(roi, frame.width, frame.height);
+    let (offset, step) = match frame.green_site() {
+        Some(g) => {
+            let step = step.next_multiple_of(2);
+            // The first green site at or after the crop's corner.
+            let first = |lo: usize, g: usize| lo + (g + 2 - lo % 2) % 2;
+            ((first(crop.x0, g.0), first(crop.y0, g.1)), step)
+        }
+        None => ((crop.x0, crop.y0), step),
+    };
+    let sample = if frame.samples_per_pixel == 3 { 1 } else { 0 };
+    let plane = frame.lattice_plane(
+        offset,
+        (step, step),
+        sample,
+        (crop.x0, crop.y0, crop.x1, crop.y1),
+    );
+    const LEVELS: usize = 4096;
+    let srgb: Vec<u8> = (0..LEVELS)
+        .map(|i| {
+            let v = i as f64 / (LEVELS - 1) as f64;
+            (255.0 * crate::photo::linearise::linear_to_srgb(v)).round() as u8
+        })
+        .collect();
+    let rgb = plane
+        .data
+        .iter()
+        .flat_map(|&v| {
+            let c = srgb[(v.clamp(0.0, 1.0) * (LEVELS - 1) as f32 + 0.5) as usize];
+            [c, c, c]
+        })
+        .collect();
+    Preview {
+        x0: plane.offset.0 as f64,
+        y0: plane.offset.1 as f64,
+        scale: step as f64,
+        width: plane.width,
+        height: plane.height,
+        rgb,
+    }
+}
+
+/// A preview of the region (plus a margin), at most ~1200 px on its long side.
+fn preview_from(
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+    pixel: impl Fn(usize, usize) -> [u8; 3],
+) -> Preview {
+    let (crop, step) = preview_window(roi, width, height);
+    let (cw, ch) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
     let (pw, ph) = (cw.div_ceil(step), ch.div_ceil(step));
     let mut rgb = Vec::with_capacity(pw * ph * 3);
     for j in 0..ph {

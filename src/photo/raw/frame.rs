@@ -632,15 +632,46 @@ impl RawFrame {
         let span = |_| (0, self.width);
         match (&self.cfa, self.samples_per_pixel) {
             (Some(cfa), _) if cfa.size() == (2, 2) => {
-                let g = [(0, 0), (1, 0), (0, 1), (1, 1)]
-                    .into_iter()
-                    .find(|&(x, y)| cfa.colour_at(x, y) == CfaColour::Green)
-                    .unwrap_or((0, 0));
+                let g = self.green_site().unwrap_or((0, 0));
                 self.site_plane(g, (2, 2), 0, all, &span)
             }
             (None, 3) => self.site_plane((0, 0), (1, 1), 1, all, &span),
             _ => self.site_plane((0, 0), (1, 1), 0, all, &span),
         }
+    }
+
+    /// The position (x, y) in the CFA repeat of a Bayer mosaic's first green
+    /// site (the one [`RawFrame::location_plane`] uses); `None` without a 2×2 CFA.
+    pub fn green_site(&self) -> Option<(usize, usize)> {
+        let cfa = self.cfa.as_ref().filter(|c| c.size() == (2, 2))?;
+        [(0, 0), (1, 0), (0, 1), (1, 1)]
+            .into_iter()
+            .find(|&(x, y)| cfa.colour_at(x, y) == CfaColour::Green)
+    }
+
+    /// The linear plane of sample `s` on the lattice of frame pixels
+    /// `offset + k·step` inside the frame rectangle `rect` = (x0, y0, x1, y1)
+    /// (pixels, end exclusive), e.g. a preview's sparse grid.
+    pub fn lattice_plane(
+        &self,
+        offset: (usize, usize),
+        step: (usize, usize),
+        s: usize,
+        rect: (usize, usize, usize, usize),
+    ) -> Plane {
+        let rect = (
+            rect.0.min(self.width),
+            rect.1.min(self.height),
+            rect.2.min(self.width),
+            rect.3.min(self.height),
+        );
+        self.site_plane(
+            offset,
+            step,
+            s.min(self.samples_per_pixel - 1),
+            rect,
+            &|_| (0, self.width),
+        )
     }
 
     /// The plane of sample `s` on the lattice with `step` and `offset` (frame
