@@ -8,7 +8,8 @@
 //!    `simulate` (demo log target, shot noise) into the temp folder, then
 //!    `decode_raw` alone against `measure_raw --channel g` (decode included)
 //!    with `--roi` on the first sweep strip, with `--roi` on the target
-//!    frame's corners (`--target`), and with the chart found automatically
+//!    frame's corners (`--target`), each as given (`--no-refine-roi`) and
+//!    refined to the edges (the command line's default), and with the chart found automatically
 //!    from the target's fiducials; then the same for the mosaic stored as
 //!    lossless-JPEG strips and as 256-px lossless-JPEG tiles (DNG
 //!    compression 7, as most cameras' raws are compressed). Each group also
@@ -180,6 +181,15 @@ fn big(c: &mut Criterion) {
         channel: Channel::G,
         ..MeasureOptions::default()
     };
+    // The command line refines given corners by default (`--no-refine-roi` turns it off).
+    let strip_refined = MeasureOptions {
+        refine_roi: true,
+        ..strip_opts.clone()
+    };
+    let target_refined = MeasureOptions {
+        refine_roi: true,
+        ..target_opts.clone()
+    };
     let auto_opts = MeasureOptions {
         channel: Channel::G,
         ..MeasureOptions::default()
@@ -210,8 +220,16 @@ fn big(c: &mut Criterion) {
         g.bench_function("measure_g_strip_roi", |b| {
             b.iter(|| black_box(measure_raw(path, "big", None, &strip_opts).unwrap()))
         });
+        g.bench_function("measure_g_strip_roi_refined", |b| {
+            b.iter(|| black_box(measure_raw(path, "big", None, &strip_refined).unwrap()))
+        });
         g.bench_function("measure_g_target_corners", |b| {
             b.iter(|| black_box(measure_raw(path, "big", Some(&big.target), &target_opts).unwrap()))
+        });
+        g.bench_function("measure_g_target_corners_refined", |b| {
+            b.iter(|| {
+                black_box(measure_raw(path, "big", Some(&big.target), &target_refined).unwrap())
+            })
         });
         g.bench_function("measure_g_auto_location", |b| {
             b.iter(|| black_box(measure_raw(path, "big", Some(&big.target), &auto_opts).unwrap()))

@@ -7,7 +7,8 @@
 //! `decode` (our decoder, whole frame), `rawler` (rawler's whole decode),
 //! `strip` (`--roi` on the demo target's sweep strip), `corners` (`--roi` =
 //! the target frame's corners, with the target) or `auto` (chart found from
-//! the fiducials). Prints the process's peak RSS (VmHWM) and the wall time.
+//! the fiducials); `strip+refine` and `corners+refine` refine the given
+//! corners to the edges first, as the command line does by default. Prints the process's peak RSS (VmHWM) and the wall time.
 //! An optional third argument repeats the case N times (for `perf record`)
 //! and prints the median time as well.
 
@@ -32,7 +33,9 @@ fn peak_rss_mb() -> f64 {
 fn main() {
     let mut args = std::env::args().skip(1);
     let (Some(file), Some(mode)) = (args.next(), args.next()) else {
-        eprintln!("usage: raw_memory FILE.dng decode|rawler|strip|corners|auto");
+        eprintln!(
+            "usage: raw_memory FILE.dng decode|rawler|strip[+refine]|corners[+refine]|auto [REPEAT]"
+        );
         std::process::exit(2);
     };
     let path = PathBuf::from(file);
@@ -50,9 +53,11 @@ fn main() {
         [5400.0, 3600.0],
         [600.0, 3600.0],
     ];
+    let refine = mode.ends_with("+refine");
     let opts = |roi| MeasureOptions {
         roi,
         channel: Channel::G,
+        refine_roi: refine,
         ..MeasureOptions::default()
     };
     let repeat: usize = args.next().and_then(|n| n.parse().ok()).unwrap_or(1).max(1);
@@ -89,7 +94,7 @@ fn run(
 ) -> Result<String, String> {
     let path = path.to_path_buf();
     let target = target.clone();
-    match mode {
+    match mode.trim_end_matches("+refine") {
         "decode" => decode_raw(&path)
             .map(|f| f.decoder)
             .map_err(|e| e.to_string()),

@@ -19,7 +19,7 @@ pub const DARK_FRACTION: f32 = 0.6;
 pub const MIN_AREA: usize = 7;
 
 /// A component's raw statistics (grid coordinates of the search image).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct Comp {
     n: usize,
     sx: f64,
@@ -238,53 +238,98 @@ fn dark_mask(g: &Gray<'_>) -> Vec<bool> {
     mask
 }
 
-/// 8-connected components of the mask.
+/// 8-connected components of the mask, in the order of their first pixel
+/// (row-major). Run-based: each row's runs of set pixels are joined to the
+/// runs of the row above that touch them (union-find), and a component's
+/// moments are summed a run at a time in closed form. Every moment is a sum of
+/// multiples of ¼, so the sums are exact and equal to a pixel-by-pixel fill's.
 fn components(mask: &[bool], w: usize, h: usize) -> Vec<Comp> {
-    let mut seen = vec![false; w * h];
-    let mut out = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..w * h {
-        if !mask[start] || seen[start] {
-            continue;
-        }
-        seen[start] = true;
-        stack.push(start);
-        let mut c = Comp {
-            n: 0,
-            sx: 0.0,
-            sy: 0.0,
-            sxx: 0.0,
-            syy: 0.0,
-            sxy: 0.0,
-            touches_border: false,
-        };
-        while let Some(p) = stack.pop() {
-            let (i, j) = (p % w, p / w);
-            let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
-            c.n += 1;
-            c.sx += x;
-            c.sy += y;
-            c.sxx += x * x;
-            c.syy += y * y;
-            c.sxy += x * y;
-            if i == 0 || j == 0 || i + 1 == w || j + 1 == h {
-                c.touches_border = true;
+    // Runs (row, first column, end column), row-major; `row_start[j]` = first run of row j.
+    let mut runs: Vec<(usize, usize, usize)> = Vec::new();
+    let mut row_start = Vec::with_capacity(h + 1);
+    for j in 0..h {
+        row_start.push(runs.len());
+        let row = &mask[j * w..(j + 1) * w];
+        let mut i = 0;
+        while i < w {
+            if !row[i] {
+                i += 1;
+                continue;
             }
-            for dj in -1i64..=1 {
-                for di in -1i64..=1 {
-                    let (ni, nj) = (i as i64 + di, j as i64 + dj);
-                    if ni < 0 || nj < 0 || ni >= w as i64 || nj >= h as i64 {
-                        continue;
-                    }
-                    let q = nj as usize * w + ni as usize;
-                    if mask[q] && !seen[q] {
-                        seen[q] = true;
-                        stack.push(q);
-                    }
+            let a = i;
+            while i < w && row[i] {
+                i += 1;
+            }
+            runs.push((j, a, i));
+        }
+    }
+    row_start.push(runs.len());
+    // Union-find over runs; the root is always the component's first run.
+    let mut parent: Vec<usize> = (0..runs.len()).collect();
+    fn find(parent: &mut [usize], mut r: usize) -> usize {
+        while parent[r] != r {
+            parent[r] = parent[parent[r]];
+            r = parent[r];
+        }
+        r
+    }
+    for j in 1..h {
+        let (above, here) = (
+            row_start[j - 1]..row_start[j],
+            row_start[j]..row_start[j + 1],
+        );
+        let mut k = above.start;
+        for r in here {
+            let (_, a, b) = runs[r];
+            // Runs above ending before column a − 1 touch neither this run nor later ones.
+            while k < above.end && runs[k].2 < a {
+                k += 1;
+            }
+            // 8-connected: a run above touches [a − 1, b] (end exclusive b + 1).
+            let mut q = k;
+            while q < above.end && runs[q].1 <= b {
+                let (x, y) = (find(&mut parent, q), find(&mut parent, r));
+                if x != y {
+                    let (lo, hi) = (x.min(y), x.max(y));
+                    parent[hi] = lo;
                 }
+                q += 1;
             }
         }
-        out.push(c);
+    }
+    let mut index = vec![usize::MAX; runs.len()];
+    let mut out: Vec<Comp> = Vec::new();
+    for r in 0..runs.len() {
+        let root = find(&mut parent, r);
+        if index[root] == usize::MAX {
+            index[root] = out.len();
+            out.push(Comp {
+                n: 0,
+                sx: 0.0,
+                sy: 0.0,
+                sxx: 0.0,
+                syy: 0.0,
+                sxy: 0.0,
+                touches_border: false,
+            });
+        }
+        let c = &mut out[index[root]];
+        let (j, a, b) = runs[r];
+        let len = (b - a) as f64;
+        let y = j as f64 + 0.5;
+        // Σ (i + ½) and Σ (i + ½)² over i in [a, b).
+        let (af, bf) = (a as f64, b as f64);
+        let sx = 0.5 * len * (af + bf);
+        let sum_sq = |m: f64| (m - 1.0) * m * (2.0 * m - 1.0) / 6.0;
+        let sum_i = |m: f64| m * (m - 1.0) / 2.0;
+        let sxx = (sum_sq(bf) - sum_sq(af)) + (sum_i(bf) - sum_i(af)) + 0.25 * len;
+        c.n += b - a;
+        c.sx += sx;
+        c.sy += len * y;
+        c.sxx += sxx;
+        c.syy += len * y * y;
+        c.sxy += y * sx;
+        c.touches_border |= j == 0 || j + 1 == h || a == 0 || b == w;
     }
     out
 }
@@ -475,6 +520,87 @@ pub fn ray_test(g: &Gray<'_>, centre: Point, cov: [f64; 3]) -> Option<RayTest> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The pixel-by-pixel flood fill the run-based labelling replaced (the oracle).
+    fn components_flood(mask: &[bool], w: usize, h: usize) -> Vec<Comp> {
+        let mut seen = vec![false; w * h];
+        let mut out = Vec::new();
+        let mut stack = Vec::new();
+        for start in 0..w * h {
+            if !mask[start] || seen[start] {
+                continue;
+            }
+            seen[start] = true;
+            stack.push(start);
+            let mut c = Comp {
+                n: 0,
+                sx: 0.0,
+                sy: 0.0,
+                sxx: 0.0,
+                syy: 0.0,
+                sxy: 0.0,
+                touches_border: false,
+            };
+            while let Some(p) = stack.pop() {
+                let (i, j) = (p % w, p / w);
+                let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
+                c.n += 1;
+                c.sx += x;
+                c.sy += y;
+                c.sxx += x * x;
+                c.syy += y * y;
+                c.sxy += x * y;
+                if i == 0 || j == 0 || i + 1 == w || j + 1 == h {
+                    c.touches_border = true;
+                }
+                for dj in -1i64..=1 {
+                    for di in -1i64..=1 {
+                        let (ni, nj) = (i as i64 + di, j as i64 + dj);
+                        if ni < 0 || nj < 0 || ni >= w as i64 || nj >= h as i64 {
+                            continue;
+                        }
+                        let q = nj as usize * w + ni as usize;
+                        if mask[q] && !seen[q] {
+                            seen[q] = true;
+                            stack.push(q);
+                        }
+                    }
+                }
+            }
+            out.push(c);
+        }
+        out
+    }
+
+    #[test]
+    fn run_labelling_equals_a_flood_fill() {
+        // Random masks of several densities (8-connected diagonals, rings,
+        // U shapes joined late), plus empty and full ones.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for (w, h, p) in [
+            (1, 1, 50),
+            (7, 5, 0),
+            (7, 5, 100),
+            (40, 30, 20),
+            (40, 30, 45),
+            (64, 48, 60),
+            (33, 1, 50),
+            (1, 33, 50),
+        ] {
+            for _ in 0..8 {
+                let mask: Vec<bool> = (0..w * h).map(|_| next() % 100 < p).collect();
+                let got = components(&mask, w, h);
+                let want = components_flood(&mask, w, h);
+                assert_eq!(got, want, "{w}×{h} at {p} %");
+            }
+        }
+    }
 
     #[test]
     fn sliding_max_matches_brute_force() {
