@@ -299,7 +299,7 @@ fn components(mask: &[bool], w: usize, h: usize) -> Vec<Comp> {
     }
     let mut index = vec![usize::MAX; runs.len()];
     let mut out: Vec<Comp> = Vec::new();
-    for r in 0..runs.len() {
+    for (r, &(j, a, b)) in runs.iter().enumerate() {
         let root = find(&mut parent, r);
         if index[root] == usize::MAX {
             index[root] = out.len();
@@ -314,7 +314,6 @@ fn components(mask: &[bool], w: usize, h: usize) -> Vec<Comp> {
             });
         }
         let c = &mut out[index[root]];
-        let (j, a, b) = runs[r];
         let len = (b - a) as f64;
         let y = j as f64 + 0.5;
         // Σ (i + ½) and Σ (i + ½)² over i in [a, b).
