@@ -114,16 +114,28 @@ fn sample_bands(
         .map(|b| {
             let mine: Vec<usize> = (0..lines).filter(|&j| j * bands / lines == b).collect();
             let mut row = vec![0.0; n];
+            // Grid positions are computed a run of RUN samples at a time first
+            // (branch-free, so the compiler vectorises the divisions), then read.
+            const RUN: usize = 64;
+            let mut grid = [[0.0f64; 2]; RUN];
             for &j in &mine {
                 let v = level(j);
-                for (i, acc) in row.iter_mut().enumerate() {
-                    if !keep[i] {
-                        *acc = f64::NAN;
+                for (c, (accs, keeps)) in row.chunks_mut(RUN).zip(keep.chunks(RUN)).enumerate() {
+                    if !keeps.iter().any(|&k| k) {
+                        accs.fill(f64::NAN);
                         continue;
                     }
-                    let u0 = i as f64 * du;
-                    let p = h.apply([u0 + (v - 0.5) * s.at(u0), v]);
-                    *acc += g.at_img(p).unwrap_or(f64::NAN);
+                    for (k, q) in grid[..accs.len()].iter_mut().enumerate() {
+                        let u0 = (c * RUN + k) as f64 * du;
+                        *q = g.to_grid(h.apply([u0 + (v - 0.5) * s.at(u0), v]));
+                    }
+                    for ((acc, &keep), &q) in accs.iter_mut().zip(keeps).zip(&grid) {
+                        *acc = if keep {
+                            *acc + g.bilinear(q).unwrap_or(f64::NAN)
+                        } else {
+                            f64::NAN
+                        };
+                    }
                 }
             }
             let c = mine.len().max(1) as f64;
@@ -156,11 +168,36 @@ struct WinSlant {
 /// Energy of the bands' sum over grid indices `i0..i1` (every `stride`-th) with
 /// each band shifted by `dv·d` (d in grid steps), each band's window mean removed.
 fn energy(b: &Bands, means: &[f64], (i0, i1, stride): (usize, usize, usize), d: f64) -> f64 {
-    let shifts = band_shifts(b, d);
-    (i0..i1)
-        .step_by(stride)
-        .map(|i| aligned_sum(b, means, &shifts, i).powi(2))
+    aligned_sums(b, means, &band_shifts(b, d), (i0, i1, stride))
+        .iter()
+        .map(|v| v * v)
         .sum()
+}
+
+/// The bands' sums at grid indices `i0..i1` (every `stride`-th), each band
+/// shifted by `shifts` (linear interpolation) and its window mean removed;
+/// accumulated a band at a time over all indices (contiguous reads the
+/// compiler vectorises).
+fn aligned_sums(
+    b: &Bands,
+    means: &[f64],
+    shifts: &[(usize, f64)],
+    (i0, i1, stride): (usize, usize, usize),
+) -> Vec<f64> {
+    let n = (i1 - i0).div_ceil(stride);
+    let mut sums = vec![-0.0; n];
+    for ((p, &(k, f)), &m) in b.prof.iter().zip(shifts).zip(means) {
+        let j0 = i0.wrapping_add(k);
+        let (here, next) = (&p[j0..], &p[j0 + 1..]);
+        for ((acc, &x0), &x1) in sums
+            .iter_mut()
+            .zip(here.iter().step_by(stride))
+            .zip(next.iter().step_by(stride))
+        {
+            *acc += x0 * (1.0 - f) + x1 * f - m;
+        }
+    }
+    sums
 }
 
 /// Each band's shift `dv·d` (d in grid steps) as whole steps (wrapping for
@@ -173,20 +210,6 @@ fn band_shifts(b: &Bands, d: f64) -> Vec<(usize, f64)> {
             (f as isize as usize, x - f)
         })
         .collect()
-}
-
-/// The bands' sum at grid index `i`, each band shifted by `shifts` (linear
-/// interpolation) and its window mean removed.
-fn aligned_sum(b: &Bands, means: &[f64], shifts: &[(usize, f64)], i: usize) -> f64 {
-    shifts
-        .iter()
-        .enumerate()
-        .map(|(g, &(k, f))| {
-            let j = i.wrapping_add(k);
-            let p = &b.prof[g];
-            p[j] * (1.0 - f) + p[j + 1] * f - means[g]
-        })
-        .sum()
 }
 
 /// Energy the bands' sum would have with no alignment at all (no cross terms),
@@ -207,15 +230,11 @@ fn incoherent(b: &Bands, means: &[f64], (i0, i1, stride): (usize, usize, usize))
 
 /// Dominant frequency (cycles per grid step) of the bands' sum aligned with shift `d`.
 fn dominant_freq(b: &Bands, means: &[f64], i0: usize, i1: usize, d: f64) -> f64 {
-    let shifts = band_shifts(b, d);
     let n = i1 - i0;
-    let sum: Vec<f64> = (i0..i1)
-        .enumerate()
-        .map(|(k, i)| {
-            let hann = 0.5 - 0.5 * (std::f64::consts::TAU * (k as f64 + 0.5) / n as f64).cos();
-            aligned_sum(b, means, &shifts, i) * hann
-        })
-        .collect();
+    let mut sum = aligned_sums(b, means, &band_shifts(b, d), (i0, i1, 1));
+    for (k, v) in sum.iter_mut().enumerate() {
+        *v *= 0.5 - 0.5 * (std::f64::consts::TAU * (k as f64 + 0.5) / n as f64).cos();
+    }
     // Frequencies from 1.5 cycles per window to a quarter of the grid rate.
     let (lo, hi) = (1.5 / n as f64, 0.25);
     let steps = 96;

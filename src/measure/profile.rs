@@ -537,11 +537,18 @@ impl Region<'_> {
                 let j = band.first + dj;
                 let y = oy + j as f64 * sy;
                 let row = &plane.data[j * plane.width + i0..j * plane.width + i1];
-                // Along a row the homography's numerator and denominator are linear in x.
+                // Along a row the homography's numerator and denominator are
+                // linear in x. The positions are computed first, a run of at
+                // most TILE at a time (a loop the compiler vectorises), then
+                // the samples are handed out.
                 let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
-                for (k, &v) in row.iter().enumerate() {
+                let mut s_buf = [0.0f64; TILE];
+                let s_run = &mut s_buf[..row.len()];
+                for (k, s) in s_run.iter_mut().enumerate() {
                     let x = ox + (i0 + k) as f64 * sx;
-                    let s = (m[0] * x + ns0) / (m[6] * x + w0);
+                    *s = (m[0] * x + ns0) / (m[6] * x + w0);
+                }
+                for (&s, &v) in s_run.iter().zip(row) {
                     f(((s * inv_bin) as usize).min(last), s, v);
                 }
             }
