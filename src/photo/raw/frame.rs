@@ -801,6 +801,39 @@ mod tests {
     }
 
     #[test]
+    fn lattice_planes_hold_the_pixels_they_name() {
+        // Per-site black, so an odd step takes the per-pixel path and an even
+        // one the constant-black path; both against the hand formula.
+        let f = mosaic();
+        assert_eq!(f.green_site(), Some((1, 0)));
+        let black = [[100.0, 90.0], [80.0, 70.0]];
+        for (offset, step, rect) in [
+            ((1, 0), (2, 2), (0, 0, 7, 5)),
+            ((0, 0), (3, 3), (0, 0, 7, 5)),
+            ((2, 1), (2, 3), (2, 1, 6, 5)),
+            ((5, 4), (4, 4), (1, 1, 99, 99)),
+        ] {
+            let p = f.lattice_plane(offset, step, 0, rect);
+            assert_eq!((p.offset, p.step), (offset, step));
+            let count = |o: usize, s: usize, hi: usize| (hi.saturating_sub(o)).div_ceil(s);
+            assert_eq!(p.width, count(offset.0, step.0, rect.2.min(7)));
+            assert_eq!(p.height, count(offset.1, step.1, rect.3.min(5)));
+            for j in 0..p.height {
+                for i in 0..p.width {
+                    let (x, y) = (offset.0 + i * step.0, offset.1 + j * step.1);
+                    let dn = 100.0 + (y * 7 + x) as f64 * 10.0;
+                    let b = black[y % 2][x % 2];
+                    let want = (dn - b) / (440.0 - b);
+                    assert!(
+                        (p.get(i, j) as f64 - want).abs() < 1e-6,
+                        "{offset:?} {step:?} ({x}, {y})"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn bayer_planes_match_a_brute_force_walk_over_every_pixel() {
         let f = mosaic();
         let black = [[100.0, 90.0], [80.0, 70.0]];
