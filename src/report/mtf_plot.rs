@@ -1,4 +1,5 @@
-//! The MTF plot: each curve with its ±1σ error band, aliased points in grey,
+//! The MTF plot: each curve with its ±1σ error band (several colour channels
+//! in their own hues, lighter for each further sweep), aliased points in grey,
 //! the Nyquist frequency and MTF50 marked; sine patches as points with error
 //! bars; with a model, dashed model curves and a hollow ring at each patch's
 //! model value. PNG or SVG.
@@ -26,6 +27,46 @@ const COLOURS: [RGBColor; 4] = [
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
 ];
+
+/// One colour per curve. When the curves are several colour channels of a
+/// photo or raw (`--channel all`), each takes its channel's hue (r red, g
+/// green, b blue), lighter for each further sweep (in order of appearance:
+/// the main sweep darkest), so channels and sweeps stay apart however many
+/// there are; otherwise the palette in curve order.
+fn curve_colours(curves: &[(&str, &str)]) -> Vec<RGBColor> {
+    let hue = |ch: &str| match ch {
+        "r" => Some(COLOURS[1]),
+        "g" => Some(COLOURS[2]),
+        "b" => Some(COLOURS[0]),
+        _ => None,
+    };
+    let mut channels: Vec<&str> = curves.iter().map(|c| c.0).collect();
+    channels.sort_unstable();
+    channels.dedup();
+    let by_channel = channels.len() > 1 && channels.iter().all(|c| hue(c).is_some());
+    if !by_channel {
+        return (0..curves.len())
+            .map(|k| COLOURS[k % COLOURS.len()])
+            .collect();
+    }
+    let mut sweeps: Vec<&str> = Vec::new();
+    for c in curves {
+        if !sweeps.contains(&c.1) {
+            sweeps.push(c.1);
+        }
+    }
+    curves
+        .iter()
+        .map(|&(channel, sweep)| {
+            let RGBColor(r, g, b) = hue(channel).unwrap_or(COLOURS[0]);
+            let k = sweeps.iter().position(|s| *s == sweep).unwrap_or(0);
+            // Full strength for the first sweep, then 60 % and 35 % (mixed with white).
+            let f = [1.0, 0.6, 0.35][k.min(2)];
+            let mix = |v: u8| (f * v as f64 + (1.0 - f) * 255.0).round() as u8;
+            RGBColor(mix(r), mix(g), mix(b))
+        })
+        .collect()
+}
 
 fn err(e: impl std::fmt::Display) -> ReportError {
     ReportError::Plot {
@@ -130,8 +171,14 @@ where
         .label("Nyquist (0.5 cy/px)")
         .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RGBColor(120, 120, 120)));
     let mut aliased_in_legend = false;
+    let names: Vec<(&str, &str)> = m
+        .curves
+        .iter()
+        .map(|c| (c.channel.as_str(), c.sweep_id.as_str()))
+        .collect();
+    let colours = curve_colours(&names);
     for (k, c) in m.curves.iter().enumerate() {
-        let col = COLOURS[k % COLOURS.len()];
+        let col = colours[k];
         let good: Vec<_> = c.points.iter().filter(|p| !p.aliased).collect();
         // Error band.
         if good.len() >= 2 {
@@ -251,4 +298,51 @@ where
         .draw()
         .map_err(err)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn colour_channels_keep_their_hue_and_sweeps_get_lighter() {
+        let c = curve_colours(&[
+            ("r", "main"),
+            ("r", "c0.4"),
+            ("g", "main"),
+            ("g", "c0.4"),
+            ("b", "main"),
+            ("b", "c0.2"),
+        ]);
+        // Main sweeps: the pure hues.
+        assert_eq!(c[0], RGBColor(214, 39, 40));
+        assert_eq!(c[2], RGBColor(44, 160, 44));
+        assert_eq!(c[4], RGBColor(31, 119, 180));
+        // Further sweeps: the same hue mixed with white (60 %, then 35 %).
+        assert_eq!(c[1], RGBColor(230, 125, 126));
+        assert_eq!(c[3], RGBColor(128, 198, 128));
+        assert_eq!(c[5], RGBColor(177, 207, 229));
+        // Every curve its own colour.
+        for i in 0..c.len() {
+            for j in 0..i {
+                assert_ne!(c[i], c[j], "{i} {j}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_channel_or_unknown_channels_use_the_palette() {
+        assert_eq!(
+            curve_colours(&[("luma", "main"), ("luma", "c0.4")]),
+            vec![COLOURS[0], COLOURS[1]]
+        );
+        assert_eq!(
+            curve_colours(&[("g", "main"), ("g", "c0.4")]),
+            vec![COLOURS[0], COLOURS[1]]
+        );
+        assert_eq!(
+            curve_colours(&[("r", "main"), ("grey", "main")]),
+            vec![COLOURS[0], COLOURS[1]]
+        );
+    }
 }
