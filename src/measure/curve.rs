@@ -43,8 +43,57 @@ pub struct Figures {
 /// Whether frequency `f` (cycles/pixel) in direction `angle` (radians) lies outside the
 /// band of a sampling lattice with steps (sx, sy) pixels.
 pub fn outside_band(f: f64, angle: f64, step: (usize, usize)) -> bool {
-    (f * angle.cos()).abs() * step.0 as f64 > 0.5 + 1e-9
-        || (f * angle.sin()).abs() * step.1 as f64 > 0.5 + 1e-9
+    Lattice::Rect(step.0, step.1).outside(f, angle)
+}
+
+/// The sampling lattice of the planes binned together for one curve, as far
+/// as aliasing goes: a frequency inside its band (the Voronoi cell of the
+/// reciprocal lattice) has no alias that binning along the sweep could mistake for it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Lattice {
+    /// Rectangular with steps (sx, sy) pixels: band |fx|·sx ≤ ½ and |fy|·sy ≤ ½.
+    Rect(usize, usize),
+    /// Two (2, 2) lattices offset by (1, 1), the chequerboard of a Bayer
+    /// mosaic's two greens: band |fx| + |fy| ≤ ½ (0.5 cy/px along the axes,
+    /// 0.35 cy/px diagonally).
+    Quincunx,
+}
+
+impl Lattice {
+    /// The lattice of a group of planes: a quincunx for two (2, 2) planes
+    /// whose offsets differ by (1, 1), else the first plane's steps.
+    pub fn of(planes: &[&crate::photo::Plane]) -> Lattice {
+        match planes {
+            [a, b]
+                if a.step == (2, 2)
+                    && b.step == (2, 2)
+                    && a.offset.0.abs_diff(b.offset.0) % 2 == 1
+                    && a.offset.1.abs_diff(b.offset.1) % 2 == 1 =>
+            {
+                Lattice::Quincunx
+            }
+            [a, ..] => Lattice::Rect(a.step.0, a.step.1),
+            [] => Lattice::Rect(1, 1),
+        }
+    }
+
+    /// Highest frequency (cycles/pixel) inside the band in direction `angle` (radians).
+    pub fn band_limit(&self, angle: f64) -> f64 {
+        let (c, s) = (angle.cos().abs(), angle.sin().abs());
+        match *self {
+            Lattice::Rect(sx, sy) => 0.5 / (c * sx as f64).max(s * sy as f64),
+            Lattice::Quincunx => 0.5 / (c + s),
+        }
+    }
+
+    /// Whether frequency `f` (cycles/pixel) in direction `angle` lies outside the band.
+    pub fn outside(&self, f: f64, angle: f64) -> bool {
+        let (fx, fy) = ((f * angle.cos()).abs(), (f * angle.sin()).abs());
+        match *self {
+            Lattice::Rect(sx, sy) => fx * sx as f64 > 0.5 + 1e-9 || fy * sy as f64 > 0.5 + 1e-9,
+            Lattice::Quincunx => fx + fy > 0.5 + 1e-9,
+        }
+    }
 }
 
 /// Estimates the chart's modulation by extrapolating the low-frequency end of the
@@ -165,6 +214,46 @@ pub fn figures(points: &[MtfPoint]) -> Figures {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_two_greens_form_a_quincunx_whose_band_is_a_diamond() {
+        use crate::photo::Plane;
+        let plane = |offset, step| Plane {
+            width: 1,
+            height: 1,
+            step,
+            offset,
+            data: vec![0.0],
+        };
+        let (gr, gb) = (plane((1, 0), (2, 2)), plane((0, 1), (2, 2)));
+        let (r, b) = (plane((0, 0), (2, 2)), plane((1, 1), (2, 2)));
+        assert_eq!(Lattice::of(&[&gr, &gb]), Lattice::Quincunx);
+        assert_eq!(Lattice::of(&[&r, &b]), Lattice::Quincunx);
+        assert_eq!(Lattice::of(&[&r, &gr]), Lattice::Rect(2, 2));
+        assert_eq!(Lattice::of(&[&r]), Lattice::Rect(2, 2));
+        let full = plane((0, 0), (1, 1));
+        assert_eq!(Lattice::of(&[&full]), Lattice::Rect(1, 1));
+        // Band edges: along the axes 0.5 cy/px, on the diagonal |f| = 0.5/√2.
+        let q = Lattice::Quincunx;
+        let d = std::f64::consts::FRAC_PI_4;
+        assert!((q.band_limit(0.0) - 0.5).abs() < 1e-12);
+        assert!((q.band_limit(d) - 0.5 / 2f64.sqrt()).abs() < 1e-12);
+        assert!(!q.outside(0.49, 0.0) && q.outside(0.51, 0.0));
+        assert!(!q.outside(0.35, d) && q.outside(0.36, d));
+        // 30°: |fx| + |fy| = f·(cos 30° + sin 30°).
+        let a = 30f64.to_radians();
+        let lim = 0.5 / (a.cos() + a.sin());
+        assert!(!q.outside(lim - 1e-6, a) && q.outside(lim + 1e-6, a));
+        // A step-2 lattice: 0.25 cy/px along x, and outside_band agrees.
+        let rect = Lattice::Rect(2, 2);
+        assert!((rect.band_limit(0.0) - 0.25).abs() < 1e-12);
+        for f in [0.1, 0.24, 0.26, 0.4] {
+            for a in [0.0, 0.3, d, 1.2] {
+                assert_eq!(rect.outside(f, a), outside_band(f, a, (2, 2)));
+                assert_eq!(rect.outside(f, a), f > rect.band_limit(a) + 1e-9);
+            }
+        }
+    }
 
     fn curve(m0: f64, f: impl Fn(f64) -> f64) -> Vec<MtfPoint> {
         (0..200)

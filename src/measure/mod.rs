@@ -1072,12 +1072,9 @@ fn measure_strip(
         });
     }
     let s_per_px = |s: f64| strip.scale_at(s).s_per_px;
-    let step = planes[0].step;
+    let lattice = curve::Lattice::of(planes);
     // Highest frequency (cy/px) at s that stays inside the lattice's band in the sweep's direction.
-    let band_limit = |s: f64| {
-        let a = strip.scale_at(s).angle_rad;
-        0.5 / (a.cos().abs() * step.0 as f64).max(a.sin().abs() * step.1 as f64)
-    };
+    let band_limit = |s: f64| lattice.band_limit(strip.scale_at(s).angle_rad);
     let ymax = prof.y.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     let ymin = prof.y.iter().cloned().fold(f64::INFINITY, f64::min);
     if !(ymax > 0.0) || (ymax - ymin) < 1e-4 * ymax.abs().max(1e-6) {

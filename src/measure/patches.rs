@@ -5,7 +5,7 @@
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-use super::curve::outside_band;
+use super::curve::Lattice;
 use super::estimate::fit::{PhaseTable, local_fit};
 use super::law::{LawKind, PhaseLaw};
 use super::profile::{BinOptions, bin_planes};
@@ -70,7 +70,7 @@ pub fn measure_patches(
             let (a, b) = (prof.s[0], prof.s[prof.s.len() - 1]);
             let half = 0.5 * (b - a) * p.freq_cy_mm;
             let f_px = p.freq_cy_mm * sc.s_per_px;
-            let aliased = outside_band(f_px, sc.angle_rad, planes[0].step);
+            let aliased = Lattice::of(planes).outside(f_px, sc.angle_rad);
             let fit = local_fit(&prof, &table, &law, 0.5 * (a + b), half + 1e-9)?;
             if !(fit.mean > 0.0) {
                 return None;

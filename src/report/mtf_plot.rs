@@ -177,6 +177,33 @@ where
         .map(|c| (c.channel.as_str(), c.sweep_id.as_str()))
         .collect();
     let colours = curve_colours(&names);
+    // Every curve's aliased points first, so that no curve's grey dots cover
+    // another curve's line (the greens reach Nyquist where R and B alias).
+    for c in &m.curves {
+        // Aliased points beyond the axis are left off rather than piled at its edge.
+        let aliased: Vec<_> = c
+            .points
+            .iter()
+            .filter(|p| p.aliased && p.freq_cy_px <= xmax)
+            .collect();
+        if !aliased.is_empty() {
+            let dots = chart
+                .draw_series(aliased.iter().map(|p| {
+                    Circle::new(
+                        (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
+                        2,
+                        RGBColor(160, 160, 160).filled(),
+                    )
+                }))
+                .map_err(err)?;
+            // One legend entry for the grey dots of every curve.
+            if !aliased_in_legend {
+                aliased_in_legend = true;
+                dots.label("aliased (not MTF)")
+                    .legend(|(x, y)| Circle::new((x + 9, y), 3, RGBColor(160, 160, 160).filled()));
+            }
+        }
+    }
     for (k, c) in m.curves.iter().enumerate() {
         let col = colours[k];
         let good: Vec<_> = c.points.iter().filter(|p| !p.aliased).collect();
@@ -208,29 +235,6 @@ where
             .map_err(err)?
             .label(label)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], col.stroke_width(2)));
-        // Aliased points beyond the axis are left off rather than piled at its edge.
-        let aliased: Vec<_> = c
-            .points
-            .iter()
-            .filter(|p| p.aliased && p.freq_cy_px <= xmax)
-            .collect();
-        if !aliased.is_empty() {
-            let dots = chart
-                .draw_series(aliased.iter().map(|p| {
-                    Circle::new(
-                        (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
-                        2,
-                        RGBColor(160, 160, 160).filled(),
-                    )
-                }))
-                .map_err(err)?;
-            // One legend entry for the grey dots of every curve.
-            if !aliased_in_legend {
-                aliased_in_legend = true;
-                dots.label("aliased (not MTF)")
-                    .legend(|(x, y)| Circle::new((x + 9, y), 3, RGBColor(160, 160, 160).filled()));
-            }
-        }
         if let Some(f50) = c.figures.mtf50_cy_px {
             chart
                 .draw_series([
