@@ -19,7 +19,7 @@ pub const DARK_FRACTION: f32 = 0.6;
 pub const MIN_AREA: usize = 7;
 
 /// A component's raw statistics (grid coordinates of the search image).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct Comp {
     n: usize,
     sx: f64,
@@ -303,15 +303,7 @@ fn components(mask: &[bool], w: usize, h: usize) -> Vec<Comp> {
         let root = find(&mut parent, r);
         if index[root] == usize::MAX {
             index[root] = out.len();
-            out.push(Comp {
-                n: 0,
-                sx: 0.0,
-                sy: 0.0,
-                sxx: 0.0,
-                syy: 0.0,
-                sxy: 0.0,
-                touches_border: false,
-            });
+            out.push(Comp::default());
         }
         let c = &mut out[index[root]];
         let len = (b - a) as f64;
@@ -531,15 +523,7 @@ mod tests {
             }
             seen[start] = true;
             stack.push(start);
-            let mut c = Comp {
-                n: 0,
-                sx: 0.0,
-                sy: 0.0,
-                sxx: 0.0,
-                syy: 0.0,
-                sxy: 0.0,
-                touches_border: false,
-            };
+            let mut c = Comp::default();
             while let Some(p) = stack.pop() {
                 let (i, j) = (p % w, p / w);
                 let (x, y) = (i as f64 + 0.5, j as f64 + 0.5);
