@@ -13,6 +13,7 @@ use super::sample::Gray;
 use crate::geometry::{Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
 use crate::target::Target;
+use rayon::prelude::*;
 
 /// One observed edge point: the target segment it belongs to and where it is in the image.
 #[derive(Debug, Clone, Copy)]
@@ -155,15 +156,16 @@ pub fn collect_edges(
     search_px: f64,
     skip_ambiguous: bool,
 ) -> Vec<EdgeObs> {
-    let mut out = Vec::new();
     let step = 0.5;
     let m = (search_px / step).ceil() as i64;
-    for seg in segments {
+    // Segments are searched in parallel; their points are kept in segment order.
+    let one = |seg: &Segment| -> Vec<EdgeObs> {
+        let mut out = Vec::new();
         let (a, b) = (seg.a, seg.b);
         let (ia, ib) = (h.apply(a), h.apply(b));
         let len = (ib[0] - ia[0]).hypot(ib[1] - ia[1]);
         if !len.is_finite() || len < 8.0 {
-            continue;
+            return out;
         }
         let n = [-(ib[1] - ia[1]) / len, (ib[0] - ia[0]) / len];
         // Which way along n is outward in the image (a mirror flips it).
@@ -223,16 +225,42 @@ pub fn collect_edges(
                 });
             }
         }
+        out
+    };
+    segments.par_iter().map(one).collect::<Vec<_>>().concat()
+}
+
+/// A target segment's line in the image under a homography.
+struct ImageLine {
+    /// Image of the segment's start (px).
+    ia: Point,
+    /// Image of the segment's end minus its start (px).
+    d: Point,
+    /// Length of `d` (px).
+    len: f64,
+}
+
+impl ImageLine {
+    /// The image line of the segment `a`–`b` (target units) under `h`.
+    fn of(h: &Homography, a: Point, b: Point) -> ImageLine {
+        let (ia, ib) = (h.apply(a), h.apply(b));
+        let d = [ib[0] - ia[0], ib[1] - ia[1]];
+        ImageLine {
+            ia,
+            d,
+            len: d[0].hypot(d[1]),
+        }
     }
-    out
+
+    /// Signed distance (px) of the image point `p` from the line.
+    fn residual(&self, p: Point) -> f64 {
+        ((p[0] - self.ia[0]) * self.d[1] - (p[1] - self.ia[1]) * self.d[0]) / self.len
+    }
 }
 
 /// Signed distance (px) of an observed point from its segment's image line.
 fn line_residual(h: &Homography, o: &EdgeObs) -> f64 {
-    let (ia, ib) = (h.apply(o.a), h.apply(o.b));
-    let (dx, dy) = (ib[0] - ia[0], ib[1] - ia[1]);
-    let len = dx.hypot(dy);
-    ((o.p[0] - ia[0]) * dy - (o.p[1] - ia[1]) * dx) / len
+    ImageLine::of(h, o.a, o.b).residual(o.p)
 }
 
 /// Robust (Huber, 1 px) Gauss–Newton fit of the homography to edge points and fixed points.
@@ -270,8 +298,23 @@ pub fn fit_homography(h0: Homography, edges: &[EdgeObs], fixed: &[(Point, Point)
         };
         base.compose(&s_inv).compose(&t).compose(&s)
     };
+    // Edge points come in runs on one segment: each run's line is mapped once.
+    let mut runs: Vec<(Point, Point, usize)> = Vec::new();
+    for o in edges {
+        match runs.last_mut() {
+            Some((a, b, k)) if *a == o.a && *b == o.b => *k += 1,
+            _ => runs.push((o.a, o.b, 1)),
+        }
+    }
     let residuals = |h: &Homography| -> Vec<f64> {
-        let mut r: Vec<f64> = edges.iter().map(|o| line_residual(h, o)).collect();
+        let mut r: Vec<f64> = Vec::with_capacity(edges.len() + 2 * fixed.len());
+        let mut rest = edges;
+        for &(a, b, k) in &runs {
+            let line = ImageLine::of(h, a, b);
+            let (run, tail) = rest.split_at(k);
+            r.extend(run.iter().map(|o| line.residual(o.p)));
+            rest = tail;
+        }
         for &(sp, d) in fixed {
             let p = h.apply(sp);
             // a fixed point weighs as much as 5 edge points in each coordinate

@@ -9,6 +9,7 @@ mod decode;
 mod dng;
 mod frame;
 mod guard;
+pub(crate) mod hugebuf;
 mod ljpeg;
 
 pub use decode::{
