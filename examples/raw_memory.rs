@@ -11,6 +11,11 @@
 //! corners to the edges first, as the command line does by default. Prints the process's peak RSS (VmHWM) and the wall time.
 //! An optional third argument repeats the case N times (for `perf record`)
 //! and prints the median time as well.
+//!
+//! Several modes joined by commas (`decode,auto+refine`) take turns, one run
+//! of each per repetition, and each later mode's median time is also given
+//! relative to the first's, as the median of the per-repetition ratios: on a
+//! shared machine whose speed drifts, neighbouring runs see the same load.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -53,32 +58,46 @@ fn main() {
         [5400.0, 3600.0],
         [600.0, 3600.0],
     ];
-    let refine = mode.ends_with("+refine");
-    let opts = |roi| MeasureOptions {
-        roi,
-        channel: Channel::G,
-        refine_roi: refine,
-        ..MeasureOptions::default()
-    };
+    let modes: Vec<&str> = mode.split(',').collect();
     let repeat: usize = args.next().and_then(|n| n.parse().ok()).unwrap_or(1).max(1);
-    let mut times = Vec::with_capacity(repeat);
-    let mut last = None;
+    // times[m][r]: mode m's wall time in repetition r (ms).
+    let mut times = vec![Vec::with_capacity(repeat); modes.len()];
+    let mut last = vec![None; modes.len()];
     for _ in 0..repeat {
-        let t = Instant::now();
-        last = Some(run(&path, &mode, &target, strip, corners, &opts));
-        times.push(t.elapsed().as_secs_f64() * 1e3);
+        for (k, m) in modes.iter().enumerate() {
+            let opts = |roi| MeasureOptions {
+                roi,
+                channel: Channel::G,
+                refine_roi: m.ends_with("+refine"),
+                ..MeasureOptions::default()
+            };
+            let t = Instant::now();
+            last[k] = Some(run(&path, m, &target, strip, corners, &opts));
+            times[k].push(t.elapsed().as_secs_f64() * 1e3);
+        }
     }
-    times.sort_by(f64::total_cmp);
-    let ms = times[0];
-    let median = times[times.len() / 2];
-    match last.expect("at least one run") {
-        Ok(w) => println!(
-            "{mode}: {ms:.1} ms (median of {repeat}: {median:.1} ms), peak RSS {:.1} MB ({w})",
-            peak_rss_mb()
-        ),
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(1);
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (k, m) in modes.iter().enumerate() {
+        let first = times[k][0];
+        let med = median(times[k].clone());
+        let ratio = if k > 0 {
+            let r = times[k].iter().zip(&times[0]).map(|(b, a)| b / a).collect();
+            format!(", {:.2} × {} (median ratio)", median(r), modes[0])
+        } else {
+            String::new()
+        };
+        match last[k].take().expect("at least one run") {
+            Ok(w) => println!(
+                "{m}: {first:.1} ms (median of {repeat}: {med:.1} ms{ratio}), peak RSS {:.1} MB ({w})",
+                peak_rss_mb()
+            ),
+            Err(e) => {
+                eprintln!("{e}");
+                std::process::exit(1);
+            }
         }
     }
 }
