@@ -221,6 +221,9 @@ pub struct Measurement {
     pub method: Method,
     /// Description of the tone linearisation.
     pub tone: String,
+    /// Raw Bayer greens: the gain the second green lattice was multiplied by
+    /// to bring it to the first's level (Gb to Gr on RGGB), when balanced.
+    pub green_gain: Option<f64>,
     /// Pixel pitch (mm), when known.
     pub pixel_pitch_mm: Option<f64>,
     /// The region corners used (image pixels).
@@ -460,7 +463,8 @@ fn measure_frame_at(
     // Only what binning reads is converted to f32.
     let (crop, span) =
         read_set(&roi, target, opts.margin, frame.width, frame.height).map_err(err)?;
-    let groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
+    let mut groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
+    let (greens, green_gain) = balance_green_group(frame, &mut groups, RAW_CLIP);
     let pitch =
         crate::photo::pitch::resolve(&frame.facts, frame.width, frame.height, opts.pixel_pitch_mm);
     let o = MeasureOptions {
@@ -473,18 +477,52 @@ fn measure_frame_at(
         &roi,
         target,
         &o,
-        0.9999,
+        RAW_CLIP,
     )
     .map_err(err)?;
     drop(groups);
     m.preview = raw_preview(frame, &roi);
     m.source = name.to_string();
     m.bits = frame.bits_per_sample as u32;
-    m.tone = "linear raw (black level removed, white level = 1)".to_string();
+    m.tone = format!("linear raw (black level removed, white level = 1{greens})");
+    m.green_gain = green_gain;
     warnings.extend(pitch.warnings);
     warnings.append(&mut m.warnings);
     m.warnings = warnings;
     Ok(m)
+}
+
+/// Linear raw level at and above which a sample counts as clipped (white = 1).
+const RAW_CLIP: f32 = 0.9999;
+
+/// Brings the second green lattice of a Bayer mosaic's green group to the
+/// first's level ([`crate::photo::raw::balance_greens`]); returns what the
+/// summary's tone line says about it ("" when nothing was balanced) and the gain.
+fn balance_green_group(
+    frame: &crate::photo::raw::RawFrame,
+    groups: &mut [(&'static str, Vec<Plane>)],
+    clip: f32,
+) -> (String, Option<f64>) {
+    let (Some(cfa), Some((_, planes))) = (&frame.cfa, groups.iter_mut().find(|g| g.0 == "g"))
+    else {
+        return (String::new(), None);
+    };
+    let [first, second] = planes.as_mut_slice() else {
+        return (String::new(), None);
+    };
+    let Some(b) = crate::photo::raw::balance_greens(first, second, clip) else {
+        return (String::new(), None);
+    };
+    let (w, h) = cfa.size();
+    let name = |p: &Plane| crate::photo::raw::green_name(cfa, (p.offset.0 % w, p.offset.1 % h));
+    let line = format!(
+        "; {} × {:.4} to {}'s level, from {} sites",
+        name(second),
+        b.gain,
+        name(first),
+        b.sites
+    );
+    (line, Some(b.gain))
 }
 
 /// The image rectangle a raw measurement with the corners `roi` reads (frame
@@ -1029,6 +1067,7 @@ pub fn measure_planes(
         bits: 0,
         method: opts.method,
         tone: String::new(),
+        green_gain: None,
         pixel_pitch_mm: opts.pixel_pitch_mm,
         roi: *roi,
         curves,

@@ -8,6 +8,7 @@
 mod decode;
 mod dng;
 mod frame;
+mod greens;
 mod guard;
 pub(crate) mod hugebuf;
 mod ljpeg;
@@ -17,4 +18,5 @@ pub use decode::{
     read_raw_facts,
 };
 pub use frame::{BlackLevels, CfaColour, CfaPattern, RawChannel, RawFrame};
+pub use greens::{GreenBalance, balance as balance_greens, green_name};
 pub use ljpeg::lossless_jpeg_cfa_tile;

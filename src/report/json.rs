@@ -68,6 +68,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
         "bits_per_sample": m.bits,
         "method": m.method.name(),
         "tone": m.tone,
+        "green_gain": m.green_gain,
         "pixel_pitch_um": m.pixel_pitch_mm.map(|p| p * 1e3),
         "roi_px": m.roi,
         "curves": curves,
