@@ -27,8 +27,8 @@ fn shot() -> Shot {
 }
 
 /// Measures the green sites of `shot` written as a DNG after its Gb sites
-/// (RGGB: even x, odd y) are scaled by `gb_gain`.
-fn measure_with_gb_gain(shot: &Shot, gb_gain: f32) -> Measurement {
+/// (RGGB: even x, odd y) are scaled by `gb_gain`, balancing the greens or not.
+fn measure_with_gb_gain(shot: &Shot, gb_gain: f32, green_balance: bool) -> Measurement {
     let linear: Vec<f32> = shot
         .linear
         .iter()
@@ -58,6 +58,7 @@ fn measure_with_gb_gain(shot: &Shot, gb_gain: f32) -> Measurement {
     let opts = MeasureOptions {
         roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
         channel: Channel::G,
+        green_balance,
         ..MeasureOptions::default()
     };
     measure_raw(&path, "greens.dng", None, &opts).unwrap()
@@ -87,8 +88,8 @@ fn rms_in(shot: &Shot, m: &Measurement, band: std::ops::RangeInclusive<f64>) -> 
 #[test]
 fn a_green_imbalance_is_taken_out_before_binning() {
     let shot = shot();
-    let balanced = measure_with_gb_gain(&shot, 1.0);
-    let imbalanced = measure_with_gb_gain(&shot, 1.02);
+    let balanced = measure_with_gb_gain(&shot, 1.0, true);
+    let imbalanced = measure_with_gb_gain(&shot, 1.02, true);
     eprintln!("balanced: {}\nGb +2 %: {}", balanced.tone, imbalanced.tone);
     // (band, bar on the RMS, largest difference from the balanced shot's RMS).
     // Uncorrected, Gb +2 % gave 0.00368 over 0.01–0.45 cy/px (balanced 0.00094).
@@ -115,4 +116,19 @@ fn a_green_imbalance_is_taken_out_before_binning() {
     assert!((gb - 1.0).abs() < 0.003, "balanced: {gb}");
     assert!((gi / gb - 1.0 / 1.02).abs() < 2e-4, "{gi} / {gb}");
     assert!(imbalanced.tone.contains("Gb × 0.9"), "{}", imbalanced.tone);
+}
+
+#[test]
+fn without_balancing_the_imbalance_shows() {
+    // `--no-green-balance`: the greens as recorded, and the 2 % shows in the
+    // MTF (RMS 0.00368 against 0.00094 balanced over 0.01–0.45 cy/px).
+    let shot = shot();
+    let raw = measure_with_gb_gain(&shot, 1.02, false);
+    let balanced = measure_with_gb_gain(&shot, 1.02, true);
+    let (rr, _) = rms_in(&shot, &raw, 0.01..=0.45);
+    let (rb, _) = rms_in(&shot, &balanced, 0.01..=0.45);
+    eprintln!("Gb +2 % as recorded: RMS {rr:.5}; balanced: {rb:.5}");
+    assert!(rr > 2.0 * rb && rr > 0.002, "{rr} vs {rb}");
+    assert_eq!(raw.green_gain, None);
+    assert!(raw.tone.contains("greens as recorded"), "{}", raw.tone);
 }

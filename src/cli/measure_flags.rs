@@ -26,6 +26,11 @@ pub struct MeasureFlags {
     /// Accepted for compatibility: refining the --roi corners is the default.
     #[arg(long, hide = true, conflicts_with = "no_refine_roi")]
     pub refine_roi: bool,
+    /// Raw Bayer files: leave the two green sites' gains as recorded (by default
+    /// the second green lattice is scaled to the first's level before the greens
+    /// are binned together; the summary gives the gain as green_gain).
+    #[arg(long)]
+    pub no_green_balance: bool,
     /// With several charts in the frame (found automatically): measure only this one, 0 = leftmost. Without it, `measure` measures each (outputs STEM.chartN.*) and `batch` the leftmost.
     #[arg(long, value_name = "N")]
     pub chart_index: Option<usize>,
@@ -91,6 +96,7 @@ impl MeasureFlags {
             window_cycles: self.window,
             chart_index: self.chart_index,
             refine_roi: !self.no_refine_roi,
+            green_balance: !self.no_green_balance,
         })
     }
 }

@@ -83,6 +83,9 @@ pub struct MeasureOptions {
     /// ±[`REFINE_SEARCH_PX`]); when the edges are not clearly seen, the corners are
     /// used as given, with a warning.
     pub refine_roi: bool,
+    /// Raw Bayer files: scale the second green lattice to the first's level
+    /// before binning the greens together ([`crate::photo::raw::balance_greens`]).
+    pub green_balance: bool,
 }
 
 /// How far (px) `refine_roi` searches around each given corner.
@@ -104,6 +107,7 @@ impl Default for MeasureOptions {
             window_cycles: 4.0,
             chart_index: None,
             refine_roi: false,
+            green_balance: true,
         }
     }
 }
@@ -464,7 +468,14 @@ fn measure_frame_at(
     let (crop, span) =
         read_set(&roi, target, opts.margin, frame.width, frame.height).map_err(err)?;
     let mut groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
-    let (greens, green_gain) = balance_green_group(frame, &mut groups, RAW_CLIP);
+    let (greens, green_gain) = if opts.green_balance {
+        balance_green_group(frame, &mut groups, RAW_CLIP)
+    } else {
+        (
+            "; greens as recorded (--no-green-balance)".to_string(),
+            None,
+        )
+    };
     let pitch =
         crate::photo::pitch::resolve(&frame.facts, frame.width, frame.height, opts.pixel_pitch_mm);
     let o = MeasureOptions {
