@@ -1198,10 +1198,13 @@ fn measure_strip(
     let est = opts.method.estimator(opts.window_cycles);
     // The modulation, and beside it the data-based aliasing check (the
     // image's local frequency versus the law).
+    // Both tabulate the law over the bins: once, shared.
+    let table = PhaseTable::new(&prof, &law);
     let (mods, dev) = rayon::join(
-        || est.estimate(&prof, &law, &grid),
-        || local_freq_deviation(&prof, &law, &grid),
+        || est.estimate_tabulated(&prof, &law, &table, &grid),
+        || local_freq_deviation(&prof, &table, &law, &grid),
     );
+    drop(table);
     let mut points: Vec<MtfPoint> = mods
         .iter()
         .map(|m| {
@@ -1389,12 +1392,16 @@ fn output_grid(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Vec<f64> {
 }
 
 /// Relative deviation of the image's local frequency from the law, (s, deviation) at grid points with a clear signal.
-fn local_freq_deviation(prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<(f64, f64)> {
-    let table = PhaseTable::new(prof, law);
+fn local_freq_deviation(
+    prof: &Profile,
+    table: &PhaseTable,
+    law: &PhaseLaw,
+    grid: &[f64],
+) -> Vec<(f64, f64)> {
     let fits: Vec<(f64, f64, f64)> = grid
         .par_iter()
         .filter_map(|&s| {
-            let f = local_fit(prof, &table, law, s, 2.0)?;
+            let f = local_fit(prof, table, law, s, 2.0)?;
             let snr = f.amp / f.amp_var.sqrt().max(1e-12);
             (snr > 15.0).then_some((s, law.phase(s), f.phase_shift))
         })

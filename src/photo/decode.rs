@@ -7,7 +7,7 @@
 //! An alpha channel is dropped. Truncated JPEGs (no end-of-image marker) are
 //! refused rather than silently filled with grey.
 
-use image::{DynamicImage, ImageFormat, ImageReader};
+use image::{ColorType, DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 use std::io::Cursor;
 use std::path::Path;
 use thiserror::Error;
@@ -126,14 +126,51 @@ pub fn decode_bytes(bytes: &[u8], name: &str) -> Result<Decoded, DecodeError> {
     }
     let mut reader = ImageReader::new(Cursor::new(bytes));
     reader.set_format(format);
-    let img = reader.decode().map_err(|e| match e {
+    let fail = |e: image::ImageError| match e {
         image::ImageError::Unsupported(u) => unsupported(u.to_string()),
         other => corrupt(other.to_string()),
-    })?;
-    let (width, height) = (img.width() as usize, img.height() as usize);
+    };
+    let decoder = reader.into_decoder().map_err(fail)?;
+    let (width, height) = decoder.dimensions();
+    let (width, height) = (width as usize, height as usize);
     if width == 0 || height == 0 {
         return Err(corrupt("the image has no pixels".into()));
     }
+    // Grey and RGB (what cameras and scanners write) are decoded straight into
+    // a buffer on huge pages (a 24 MP JPEG's 72 MB would otherwise fault in
+    // as 18 000 small pages); other layouts go through `DynamicImage`.
+    let direct = match decoder.color_type() {
+        ColorType::L8 | ColorType::L16 => Some(1),
+        ColorType::Rgb8 | ColorType::Rgb16 => Some(3),
+        _ => None,
+    };
+    if let Some(channels) = direct {
+        // The image crate's default allocation limit (512 MiB), as its own decode applies.
+        image::Limits::default()
+            .reserve(decoder.total_bytes())
+            .map_err(fail)?;
+        let n = width * height * channels;
+        let samples = if decoder.color_type().bytes_per_pixel() as usize == channels {
+            let mut buf = super::hugebuf::zeroed::<u8>(n);
+            decoder.read_image(&mut buf).map_err(fail)?;
+            Samples::U8(buf)
+        } else {
+            let mut buf = super::hugebuf::zeroed::<u16>(n);
+            // Native-endian 16-bit samples, as `DynamicImage` reads them.
+            decoder
+                .read_image(bytemuck::cast_slice_mut(&mut buf))
+                .map_err(fail)?;
+            Samples::U16(buf)
+        };
+        return Ok(Decoded {
+            width,
+            height,
+            channels,
+            samples,
+            format: format_name,
+        });
+    }
+    let img = DynamicImage::from_decoder(decoder).map_err(fail)?;
     let (channels, samples) = match img {
         DynamicImage::ImageLuma8(b) => (1, Samples::U8(b.into_raw())),
         DynamicImage::ImageRgb8(b) => (3, Samples::U8(b.into_raw())),
@@ -199,6 +236,45 @@ mod tests {
         );
         assert_eq!(d.value(2, 1, 0), 2000.0 / 65535.0);
         assert_eq!(d.value(2, 1, 1), 7.0 / 65535.0);
+    }
+
+    #[test]
+    fn alpha_is_dropped_and_sixteen_bit_grey_kept() {
+        // RGBA goes through `DynamicImage` (alpha dropped); 16-bit grey is read directly.
+        let rgba =
+            image::RgbaImage::from_fn(5, 4, |x, y| image::Rgba([x as u8 * 50, y as u8, 7, 128]));
+        let d = decode_bytes(
+            &encode(DynamicImage::ImageRgba8(rgba), ImageFormat::Png),
+            "a.png",
+        )
+        .unwrap();
+        assert_eq!((d.width, d.height, d.channels, d.bits()), (5, 4, 3, 8));
+        assert_eq!(d.value(3, 2, 0), 150.0 / 255.0);
+        assert_eq!(d.value(3, 2, 1), 2.0 / 255.0);
+        let grey16 = image::ImageBuffer::<image::Luma<u16>, _>::from_fn(6, 2, |x, y| {
+            image::Luma([x as u16 * 10_000 + y as u16])
+        });
+        let d = decode_bytes(
+            &encode(DynamicImage::ImageLuma16(grey16), ImageFormat::Png),
+            "g16.png",
+        )
+        .unwrap();
+        assert_eq!((d.channels, d.bits()), (1, 16));
+        assert_eq!(d.value(5, 1, 0), 50_001.0 / 65535.0);
+    }
+
+    #[test]
+    fn a_header_promising_gigabytes_is_refused_before_allocating() {
+        // A PNG header of 30000×30000 16-bit RGB (5.4 GB) with no pixel data.
+        let mut bytes = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut bytes, 30_000, 30_000);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Sixteen);
+            let _writer = enc.write_header().unwrap();
+        }
+        let e = decode_bytes(&bytes, "huge.png").unwrap_err();
+        assert!(e.to_string().starts_with("huge.png: "), "{e}");
     }
 
     #[test]

@@ -5,6 +5,7 @@
 
 pub mod decode;
 pub mod exif;
+pub(crate) mod hugebuf;
 pub mod linearise;
 pub mod pitch;
 pub mod raw;

@@ -10,7 +10,6 @@ mod dng;
 mod frame;
 mod greens;
 mod guard;
-pub(crate) mod hugebuf;
 mod ljpeg;
 
 pub use decode::{

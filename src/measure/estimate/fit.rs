@@ -232,10 +232,19 @@ impl Estimator for SineFit {
     }
 
     fn estimate(&self, prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<ModPoint> {
-        let table = PhaseTable::new(prof, law);
+        self.estimate_tabulated(prof, law, &PhaseTable::new(prof, law), grid)
+    }
+
+    fn estimate_tabulated(
+        &self,
+        prof: &Profile,
+        law: &PhaseLaw,
+        table: &PhaseTable,
+        grid: &[f64],
+    ) -> Vec<ModPoint> {
         grid.par_iter()
             .filter_map(|&s0| {
-                let f = local_fit(prof, &table, law, s0, 0.5 * self.window_cycles)?;
+                let f = local_fit(prof, table, law, s0, 0.5 * self.window_cycles)?;
                 (f.mean > 0.0 && f.cycles >= 0.8 * self.window_cycles.min(3.0)).then(|| ModPoint {
                     s: s0,
                     modulation: f.modulation(),

@@ -32,6 +32,17 @@ pub trait Estimator: Sync {
     fn name(&self) -> &'static str;
     /// Modulation samples; `grid` suggests output positions (estimators with their own natural positions may ignore it).
     fn estimate(&self, prof: &Profile, law: &PhaseLaw, grid: &[f64]) -> Vec<ModPoint>;
+    /// [`Estimator::estimate`] given `law` already tabulated over the bins
+    /// (estimators that use the table skip building their own).
+    fn estimate_tabulated(
+        &self,
+        prof: &Profile,
+        law: &PhaseLaw,
+        _table: &fit::PhaseTable,
+        grid: &[f64],
+    ) -> Vec<ModPoint> {
+        self.estimate(prof, law, grid)
+    }
 }
 
 /// The modulation estimator to use.

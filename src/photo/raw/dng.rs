@@ -411,7 +411,7 @@ fn frame_of(
         (0, 0, 0, 0)
     };
     // Lazily zeroed: pages outside the decoded rectangle are never touched.
-    let mut out = crate::photo::raw::hugebuf::zeroed::<u16>(fw * fh * spp);
+    let mut out = crate::photo::hugebuf::zeroed::<u16>(fw * fh * spp);
     if decoded.2 > decoded.0 {
         let job = Job {
             codec,

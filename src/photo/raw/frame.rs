@@ -698,7 +698,7 @@ impl RawFrame {
         let (x0, pw) = range(offset.0, step.0, rect.0, rect.2);
         let (y0, ph) = range(offset.1, step.1, rect.1, rect.3);
         let spp = self.samples_per_pixel;
-        let mut data = super::hugebuf::zeroed::<f32>(pw * ph);
+        let mut data = crate::photo::hugebuf::zeroed::<f32>(pw * ph);
         // Constant black along the plane when the black repeat divides the lattice step.
         let constant = step.0.is_multiple_of(self.black.width)
             && step.1.is_multiple_of(self.black.height)
