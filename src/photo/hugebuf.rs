@@ -33,3 +33,26 @@ fn advise<T>(v: &[T]) {
 
 #[cfg(not(target_os = "linux"))]
 fn advise<T>(_: &[T]) {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn buffers_small_and_big_are_zeroed_and_writable() {
+        for n in [0, 7, 3 << 20] {
+            let mut v = zeroed::<u16>(n);
+            assert_eq!(v.len(), n);
+            assert!(v.iter().all(|&x| x == 0));
+            if let Some(last) = v.last_mut() {
+                *last = 7;
+            }
+            assert_eq!(
+                v.iter().map(|&x| x as u64).sum::<u64>(),
+                if n > 0 { 7 } else { 0 }
+            );
+        }
+        let f = zeroed::<f32>(5 << 20);
+        assert!(f.iter().all(|&x| x == 0.0));
+    }
+}
