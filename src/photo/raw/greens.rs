@@ -12,8 +12,9 @@
 //! chequerboard as an imbalance, beating slowly in sign along the sweep,
 //! and sharp edges put one side's value on one lattice only; a sum over the
 //! whole region took those for gain (on a balanced simulated mosaic it
-//! raised the MTF's RMS error from 0.00094 to 0.00254), while most blocks (low frequencies, flat areas) see only the
-//! gain. The second lattice is scaled by it.
+//! raised the MTF's RMS error from 0.00094 to 0.00254), while most blocks
+//! (low frequencies, flat areas) see only the gain. The second lattice is
+//! scaled by it.
 
 use super::frame::{CfaColour, CfaPattern};
 use crate::photo::Plane;
