@@ -8,22 +8,19 @@
 //! name the gain that was taken out.
 
 use sweepmtf::measure::{MeasureOptions, Measurement, measure_raw};
-use sweepmtf::model::System;
-use sweepmtf::photo::linearise::Channel;
-use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
-use sweepmtf::simulate::{self, BayerOrder, Camera, Shot};
-use sweepmtf::target::SweepLaw;
+use sweepmtf::simulate::Shot;
+use sweepmtf::simulate::dng::DngSettings;
+
+#[allow(dead_code)] // only its `truth_at` is used here
+mod csv_support;
+mod raw_support;
+use raw_support::{green_strip_options, rggb_shot, rms_vs_truth as rms_in, write_dng};
 
 const W: usize = 900;
 const H: usize = 600;
 
 fn shot() -> Shot {
-    let camera = Camera {
-        bayer: Some(BayerOrder::Rggb),
-        ..Camera::noiseless(W, H)
-    };
-    let target = simulate::demo::demo_target(SweepLaw::Log);
-    simulate::render(&target, &System::default(), &camera).unwrap()
+    rggb_shot(W, H)
 }
 
 /// Measures the green sites of `shot` written as a DNG after its Gb sites
@@ -42,47 +39,19 @@ fn measure_with_gb_gain(shot: &Shot, gb_gain: f32, green_balance: bool) -> Measu
             }
         })
         .collect();
-    let bytes = encode_mosaic(
-        &linear,
-        W,
-        H,
-        BayerOrder::Rggb,
-        4.3,
-        &DngSettings::default(),
-    )
-    .unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("greens.dng");
-    std::fs::write(&path, bytes).unwrap();
-    let r = shot.roi().unwrap();
+    let path = write_dng(
+        dir.path(),
+        "greens.dng",
+        &linear,
+        (W, H),
+        &DngSettings::default(),
+    );
     let opts = MeasureOptions {
-        roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
-        channel: Channel::G,
         green_balance,
-        ..MeasureOptions::default()
+        ..green_strip_options(shot)
     };
     measure_raw(&path, "greens.dng", None, &opts).unwrap()
-}
-
-/// RMS of MTF − truth over the unaliased points with frequency in `band` (cy/px), and their count.
-fn rms_in(shot: &Shot, m: &Measurement, band: std::ops::RangeInclusive<f64>) -> (f64, usize) {
-    let truth = shot.truth().unwrap();
-    let truth_at = |f: f64| {
-        let rows = &truth.rows;
-        let i = rows
-            .partition_point(|p| p.freq_cy_px < f)
-            .clamp(1, rows.len() - 1);
-        let (a, b) = (&rows[i - 1], &rows[i]);
-        a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
-    };
-    let errs: Vec<f64> = m.curves[0]
-        .points
-        .iter()
-        .filter(|p| !p.aliased && band.contains(&p.freq_cy_px))
-        .map(|p| p.mtf - truth_at(p.freq_cy_px))
-        .collect();
-    let rms = (errs.iter().map(|e| e * e).sum::<f64>() / errs.len().max(1) as f64).sqrt();
-    (rms, errs.len())
 }
 
 #[test]

@@ -5,43 +5,31 @@
 //! simulator's strip corners in the stored frame and must meet the noiseless
 //! bar against the simulator's truth.
 
-use sweepmtf::measure::{MeasureOptions, measure_raw};
-use sweepmtf::model::System;
-use sweepmtf::photo::linearise::Channel;
+use sweepmtf::measure::measure_raw;
 use sweepmtf::photo::raw::decode_raw;
-use sweepmtf::simulate::dng::{DngSettings, encode_mosaic};
-use sweepmtf::simulate::{self, BayerOrder, Camera};
-use sweepmtf::target::SweepLaw;
+use sweepmtf::simulate::dng::DngSettings;
+
+#[allow(dead_code)] // only its `truth_at` is used here
+mod csv_support;
+mod raw_support;
+use raw_support::{green_strip_options, rggb_shot, rms_vs_truth, write_dng};
 
 #[test]
 fn roi_is_in_the_stored_frame_and_the_orientation_is_named() {
     let (w, h) = (900usize, 600usize);
-    let camera = Camera {
-        bayer: Some(BayerOrder::Rggb),
-        ..Camera::noiseless(w, h)
-    };
-    let target = simulate::demo::demo_target(SweepLaw::Log);
-    let shot = simulate::render(&target, &System::default(), &camera).unwrap();
+    let shot = rggb_shot(w, h);
     let settings = DngSettings {
         orientation: 6,
         ..DngSettings::default()
     };
-    let bytes = encode_mosaic(&shot.linear, w, h, BayerOrder::Rggb, 4.3, &settings).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("turned.dng");
-    std::fs::write(&path, bytes).unwrap();
+    let path = write_dng(dir.path(), "turned.dng", &shot.linear, (w, h), &settings);
 
     let frame = decode_raw(&path).unwrap();
     assert_eq!(frame.facts.orientation, Some(6));
     assert_eq!((frame.width, frame.height), (w, h), "stored, not turned");
 
-    let r = shot.roi().unwrap();
-    let opts = MeasureOptions {
-        roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
-        channel: Channel::G,
-        ..MeasureOptions::default()
-    };
-    let m = measure_raw(&path, "turned.dng", None, &opts).unwrap();
+    let m = measure_raw(&path, "turned.dng", None, &green_strip_options(&shot)).unwrap();
     assert!(
         m.warnings
             .iter()
@@ -50,57 +38,23 @@ fn roi_is_in_the_stored_frame_and_the_orientation_is_named() {
         m.warnings
     );
     assert_eq!((m.image_width, m.image_height), (w, h));
-    let truth = shot.truth().unwrap();
-    let truth_at = |f: f64| {
-        let rows = &truth.rows;
-        let i = rows
-            .partition_point(|p| p.freq_cy_px < f)
-            .clamp(1, rows.len() - 1);
-        let (a, b) = (&rows[i - 1], &rows[i]);
-        a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
-    };
-    let errs: Vec<f64> = m.curves[0]
-        .points
-        .iter()
-        .filter(|p| !p.aliased && (0.01..=0.45).contains(&p.freq_cy_px))
-        .map(|p| p.mtf - truth_at(p.freq_cy_px))
-        .collect();
-    let rms = (errs.iter().map(|e| e * e).sum::<f64>() / errs.len() as f64).sqrt();
-    assert!(
-        errs.len() > 20 && rms <= 0.005,
-        "RMS {rms} over {}",
-        errs.len()
-    );
+    let (rms, n) = rms_vs_truth(&shot, &m, 0.01..=0.45);
+    assert!(n > 20 && rms <= 0.005, "RMS {rms} over {n}");
 }
 
 #[test]
 fn an_upright_raw_gets_no_orientation_warning() {
     let (w, h) = (600usize, 400usize);
-    let camera = Camera {
-        bayer: Some(BayerOrder::Rggb),
-        ..Camera::noiseless(w, h)
-    };
-    let target = simulate::demo::demo_target(SweepLaw::Log);
-    let shot = simulate::render(&target, &System::default(), &camera).unwrap();
-    let bytes = encode_mosaic(
-        &shot.linear,
-        w,
-        h,
-        BayerOrder::Rggb,
-        4.3,
-        &DngSettings::default(),
-    )
-    .unwrap();
+    let shot = rggb_shot(w, h);
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("upright.dng");
-    std::fs::write(&path, bytes).unwrap();
-    let r = shot.roi().unwrap();
-    let opts = MeasureOptions {
-        roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
-        channel: Channel::G,
-        ..MeasureOptions::default()
-    };
-    let m = measure_raw(&path, "upright.dng", None, &opts).unwrap();
+    let path = write_dng(
+        dir.path(),
+        "upright.dng",
+        &shot.linear,
+        (w, h),
+        &DngSettings::default(),
+    );
+    let m = measure_raw(&path, "upright.dng", None, &green_strip_options(&shot)).unwrap();
     assert!(
         !m.warnings.iter().any(|w| w.contains("orientation")),
         "{:?}",
