@@ -2,7 +2,7 @@
 //! search on the reduced image, refine at full resolution. Bar: ≤ 200 ms.
 //! Run: `cargo bench --bench locate`.
 
-#[path = "../tests/locate_support/mod.rs"]
+#[path = "../tests/it/locate_support/mod.rs"]
 mod locate_support;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -40,14 +40,10 @@ fn bench(c: &mut Criterion) {
     }
     g.finish();
     // The real photo of another chart design (no chart of ours in it): time to say so.
-    let rel = "shared/realdata/chart_photo/mtfmapper_perspective_chart_photo.jpg";
-    let path = [
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../"),
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../../"),
-    ]
-    .iter()
-    .map(|d| d.to_string() + rel)
-    .find(|p| std::path::Path::new(p).exists());
+    let path = Some(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/testdata/real/chart_photo/mtfmapper_perspective_chart_photo.jpg"
+    ));
     if let Some(path) = path {
         let plane = load_linear_luma(&path);
         c.bench_function("locate_realphoto_not_found", |b| {

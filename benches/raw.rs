@@ -36,12 +36,7 @@ use sweepmtf::simulate::{self, BayerOrder, Camera};
 use sweepmtf::target::SweepLaw;
 
 fn dng() -> PathBuf {
-    let beside = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/realdata"));
-    let above = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/realdata"
-    ));
-    if beside.exists() { beside } else { above }
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/testdata/real"))
         .join("raw/tinydng_colorchart_canon550d_magiclantern.dng")
 }
 

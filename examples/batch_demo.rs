@@ -10,7 +10,7 @@
 //! sweepmtf batch demo_shots -o demo_out --roi-file demo_shots/rois.csv
 //! ```
 
-#[path = "../tests/batch_stub/exif_jpeg.rs"]
+#[path = "../tests/it/batch_stub/exif_jpeg.rs"]
 mod exif_jpeg;
 
 use std::fmt::Write as _;

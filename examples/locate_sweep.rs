@@ -17,7 +17,7 @@
 //! simulator's exact corners, to tell location's errors from measurement's), then the table: found rate, corner
 //! RMS/max, MTF RMS median/95th/max per bar category, and time per shot.
 
-#[path = "../tests/locate_support/sweep.rs"]
+#[path = "../tests/it/locate_support/sweep.rs"]
 mod sweep;
 
 use sweep::{Outcome, Pose, Rng, bar};
