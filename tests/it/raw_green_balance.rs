@@ -12,7 +12,6 @@ use sweepmtf::simulate::Shot;
 use sweepmtf::simulate::dng::DngSettings;
 
 #[allow(dead_code)] // only its `truth_at` is used here
-use crate::csv_support;
 use crate::raw_support;
 use raw_support::{green_strip_options, rggb_shot, rms_vs_truth as rms_in, write_dng};
 
