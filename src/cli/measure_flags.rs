@@ -114,11 +114,11 @@ pub fn parse_roi(text: &str) -> Result<[[f64; 2]; 4], String> {
     }
 }
 
-fn parse_method(s: &str) -> Result<Method, String> {
+pub fn parse_method(s: &str) -> Result<Method, String> {
     Method::parse(s).ok_or_else(|| format!("'{s}': use extrema, fit or envelope"))
 }
 
-fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
+pub fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
     match s {
         "auto" => Ok(SweepChoice::Auto),
         "linear" => Ok(SweepChoice::Linear),
@@ -127,7 +127,7 @@ fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
     }
 }
 
-fn parse_channel(s: &str) -> Result<Channel, String> {
+pub fn parse_channel(s: &str) -> Result<Channel, String> {
     Channel::parse(s).ok_or_else(|| format!("'{s}': use luma, r, g, b or all"))
 }
 

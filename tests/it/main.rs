@@ -3,6 +3,7 @@
 
 mod batch_stub;
 mod csv_support;
+mod gui_support;
 mod locate_support;
 mod model_ref;
 mod patch_shot;
@@ -16,6 +17,8 @@ mod batch_shard;
 mod chart_output;
 mod chart_sinemtf;
 mod exif_jpeg;
+mod gui_api;
+mod gui_browser;
 mod locate_each_chart;
 mod locate_find;
 mod locate_mtf;
