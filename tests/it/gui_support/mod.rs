@@ -132,8 +132,28 @@ pub fn http(port: u16, method: &str, path: &str, headers: &[(&str, &str)], body:
         // The server may answer (413) and close before reading a body.
         let _ = s.write_all(body);
     }
+    // Read until the body is complete (servers may keep the connection open).
     let mut raw = Vec::new();
-    let _ = s.read_to_end(&mut raw);
+    let mut buf = [0u8; 65536];
+    loop {
+        match s.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => raw.extend_from_slice(&buf[..n]),
+        }
+        if let Some(end) = raw.windows(4).position(|w| w == b"\r\n\r\n") {
+            let head = String::from_utf8_lossy(&raw[..end]).to_ascii_lowercase();
+            let len = head
+                .lines()
+                .find_map(|l| l.strip_prefix("content-length:"))
+                .and_then(|v| v.trim().parse::<usize>().ok());
+            if len.is_some_and(|n| raw.len() >= end + 4 + n) {
+                break;
+            }
+            if head.contains("chunked") && raw.ends_with(b"0\r\n\r\n") {
+                break;
+            }
+        }
+    }
     parse_reply(&raw)
 }
 
