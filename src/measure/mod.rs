@@ -12,7 +12,8 @@
 
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
-use crate::photo::decode::{DecodeError, Decoded, Samples, decode_bytes, decode_file};
+use crate::photo::decode::{DecodeError, Decoded, Samples, decode_bytes_want, decode_file};
+use crate::photo::jpeg::JpegWant;
 use crate::photo::linearise::{
     Channel, Crop, Tone, ToneCurve, default_tone, plane_names, planes, planes_within,
 };
@@ -366,7 +367,7 @@ fn decode_with_pitch(
         }
         .into(),
     })?;
-    let dec = decode_bytes(&bytes, &name).map_err(|e| MeasureError {
+    let dec = decode_bytes_want(&bytes, &name, jpeg_want(opts)).map_err(|e| MeasureError {
         path: name.clone(),
         failure: e.into(),
     })?;
@@ -377,7 +378,26 @@ fn decode_with_pitch(
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    Ok((dec, o, pitch.warnings))
+    let mut warnings = dec.warnings.clone();
+    warnings.extend(pitch.warnings);
+    Ok((dec, o, warnings))
+}
+
+/// Rows below the region's lowest corner that a measurement may still read
+/// (corner refinement's search and crop, the binned rows' padding), px.
+const ROWS_BELOW_ROI: f64 = 64.0;
+
+/// What of a JPEG the measurement reads: with corners given, the rows down
+/// to just below the region; for a luminance measurement without a tone
+/// curve from the chart, the luma plane alone (see `photo::jpeg`).
+fn jpeg_want(opts: &MeasureOptions) -> JpegWant {
+    JpegWant {
+        rows: opts.roi.map(|q| {
+            let ymax = q.iter().map(|p| p[1]).fold(0.0, f64::max);
+            (ymax + ROWS_BELOW_ROI).ceil().max(0.0) as usize
+        }),
+        luma_only: opts.channel == Channel::Luma && !opts.tone_chart,
+    }
 }
 
 /// Measures a camera raw file: linear CFA planes, no demosaicing, no tone curve.
@@ -1432,7 +1452,8 @@ fn dev_at(dev: &[(f64, f64)], s: f64) -> Option<f64> {
 }
 
 fn make_preview(dec: &Decoded, roi: &[Point; 4]) -> Preview {
-    preview_from(roi, dec.width, dec.height, |x, y| {
+    // A cut decode holds rows down to just below the region: the picture stops there.
+    preview_from(roi, dec.width, dec.rows, |x, y| {
         let mut px = [0u8; 3];
         for (c, out) in px.iter_mut().enumerate() {
             let cc = if dec.channels == 1 { 0 } else { c };
