@@ -10,7 +10,8 @@ use super::tone::photo_tone;
 use super::{Failure, MeasureError, MeasureOptions, Measurement, measure_planes};
 use crate::geometry::Point;
 use crate::photo::Plane;
-use crate::photo::decode::{DecodeError, Decoded, decode_bytes};
+use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
+use crate::photo::jpeg::JpegWant;
 use crate::photo::linearise::{Channel, Crop, plane_names, planes_within};
 use crate::target::Target;
 use std::path::Path;
@@ -31,7 +32,7 @@ pub(super) fn decode_with_pitch(
         }
         .into(),
     })?;
-    let dec = decode_bytes(&bytes, &name).map_err(|e| MeasureError {
+    let dec = decode_bytes_want(&bytes, &name, jpeg_want(opts)).map_err(|e| MeasureError {
         path: name.clone(),
         failure: e.into(),
     })?;
@@ -42,7 +43,26 @@ pub(super) fn decode_with_pitch(
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    Ok((dec, o, pitch.warnings))
+    let mut warnings = dec.warnings.clone();
+    warnings.extend(pitch.warnings);
+    Ok((dec, o, warnings))
+}
+
+/// Rows below the region's lowest corner that a measurement may still read
+/// (corner refinement's search and crop, the binned rows' padding), px.
+const ROWS_BELOW_ROI: f64 = 64.0;
+
+/// What of a JPEG the measurement reads: with corners given, the rows down
+/// to just below the region; for a luminance measurement without a tone
+/// curve from the chart, the luma plane alone (see `photo::jpeg`).
+fn jpeg_want(opts: &MeasureOptions) -> JpegWant {
+    JpegWant {
+        rows: opts.roi.map(|q| {
+            let ymax = q.iter().map(|p| p[1]).fold(0.0, f64::max);
+            (ymax + ROWS_BELOW_ROI).ceil().max(0.0) as usize
+        }),
+        luma_only: opts.channel == Channel::Luma && !opts.tone_chart,
+    }
 }
 
 /// The part of [`measure_raw`] after the region is known: `roi` (frame px)

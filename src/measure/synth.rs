@@ -236,3 +236,23 @@ pub fn big_shot() -> SynthShot {
         ..base
     }
 }
+
+/// The 24-megapixel shot of the libjpeg-turbo comparison (issue 16,
+/// examples/djpeg_ratio.rs): 6000×4000, a 5200×1700 px log sweep
+/// 0.004→0.6 cy/px turned 1° (its corners cover ≈ 37 % of the frame),
+/// SNR ≈ 50, JPEG q92.
+pub fn wide_strip_shot() -> SynthShot {
+    let big = big_shot();
+    SynthShot {
+        name: "wide".into(),
+        quad: strip_quad(3000.0, 2000.0, 5200.0, 1700.0, 1.0, 0.0),
+        length: 5200.0,
+        strip_width: 1700.0,
+        law: super::PhaseLaw {
+            c2: (0.6f64 / 0.004).ln() / 5200.0,
+            ..big.law
+        },
+        jpeg_quality: Some(92),
+        ..big
+    }
+}

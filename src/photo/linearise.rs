@@ -219,6 +219,7 @@ pub fn planes_within(
     channel: Channel,
     span: &(dyn Fn(usize) -> (usize, usize) + Sync),
 ) -> Vec<Plane> {
+    debug_assert!(crop.y1 <= dec.rows, "rows below the decoded part are read");
     let (w, h) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
     let levels = match dec.samples {
         Samples::U8(_) => 256,
@@ -322,6 +323,8 @@ mod tests {
                 255, 255, 255, 0, 0, 0, 128, 128, 128,
             ]),
             format: "png",
+            rows: 2,
+            warnings: Vec::new(),
         };
         let crop = Crop {
             x0: 1,

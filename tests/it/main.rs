@@ -16,6 +16,7 @@ mod batch_shard;
 mod chart_output;
 mod chart_sinemtf;
 mod exif_jpeg;
+mod jpeg_region;
 mod locate_each_chart;
 mod locate_find;
 mod locate_mtf;
