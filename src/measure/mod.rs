@@ -88,6 +88,13 @@ pub struct MeasureOptions {
     pub green_balance: bool,
 }
 
+/// Quality gate: least strip width inside the margins (px) for a curve.
+pub const MIN_ACROSS_PX: f64 = 3.0;
+/// Quality gate: largest RMS phase residual of the fitted sweep law (cycles).
+pub const MAX_LAW_RMS_CYCLES: f64 = 0.15;
+/// Quality gate: largest relative uncertainty of an extrapolated chart modulation.
+pub const MAX_CHART_REL_ERR: f64 = 0.03;
+
 /// How far (px) `refine_roi` searches around each given corner.
 pub const REFINE_SEARCH_PX: f64 = 8.0;
 
@@ -150,6 +157,10 @@ pub enum Failure {
     /// The chart's modulation is neither given nor estimable.
     #[error("chart modulation unknown: {0}")]
     ModulationUnknown(String),
+    /// A curve was measured but fails the quality gate (too few samples per
+    /// bin, a poorly fitting phase law, or modulation lost in noise).
+    #[error("curve refused: {0}")]
+    Unreliable(String),
 }
 
 /// A failed measurement: the file and the cause, displayed as one line.
@@ -177,6 +188,8 @@ pub struct Curve {
     pub points: Vec<MtfPoint>,
     /// Chart modulation used for normalisation.
     pub chart_modulation: f64,
+    /// One-sigma uncertainty of `chart_modulation` (0 when printed on the target).
+    pub chart_modulation_err: f64,
     /// Where the chart modulation came from.
     pub chart_modulation_source: String,
     /// Summary figures.
@@ -573,9 +586,28 @@ fn refine_or_keep(
                 .zip(&refined)
                 .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
                 .fold(0.0, f64::max);
-            warnings.push(format!(
-                "region corners refined to the edges (moved up to {moved:.2} px)"
-            ));
+            if target.is_some() {
+                warnings.push(format!(
+                    "region corners refined to the edges (moved up to {moved:.2} px)"
+                ));
+            } else {
+                // Split each corner's move into across the strip (long edges fitted
+                // to the edges seen) and along it (ends turned along the bars).
+                let (dx, dy) = (given[1][0] - given[0][0], given[1][1] - given[0][1]);
+                let len = dx.hypot(dy).max(1e-12);
+                let (ux, uy) = (dx / len, dy / len);
+                let (mut along, mut across) = (0.0f64, 0.0f64);
+                for (a, b) in given.iter().zip(&refined) {
+                    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                    along = along.max((ex * ux + ey * uy).abs());
+                    across = across.max((ey * ux - ex * uy).abs());
+                }
+                warnings.push(format!(
+                    "region corners refined to the edges: long edges moved up to {across:.2} px across the \
+                     strip onto the edges seen; ends kept, turned along the printed bars \
+                     (corners slid up to {along:.2} px along the strip)"
+                ));
+            }
             refined
         }
         Err(e) => {
@@ -1178,11 +1210,25 @@ fn measure_strip(
             best = Some(r);
         }
     }
-    let Some((law, _, n_resolved)) = best else {
+    let Some((law, law_rms, n_resolved)) = best else {
         return Err(Failure::NoOscillation(format!(
             "{channel}/{id}: the oscillation is too weak or irregular to follow"
         )));
     };
+    // Quality gate: a strip too thin to average across, or a phase law that the
+    // local fits do not follow, gives a curve that only looks confident.
+    if wid_px < MIN_ACROSS_PX {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the strip is {wid_px:.1} px across inside its margins; \
+             at least {MIN_ACROSS_PX} px are needed to average the sweep across it"
+        )));
+    }
+    if law_rms > MAX_LAW_RMS_CYCLES {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the sweep's phase law fits poorly (RMS {law_rms:.3} cycles, \
+             at most {MAX_LAW_RMS_CYCLES})"
+        )));
+    }
     let total_cycles = law.phase(prof.length) - law.phase(0.0);
     if total_cycles < 5.0 || n_resolved < 5 {
         return Err(Failure::TooSmall(format!(
@@ -1240,22 +1286,62 @@ fn measure_strip(
             "{channel}/{id}: fewer than 5 usable modulation points"
         )));
     }
-    let (m_chart, source) = match contrast {
-        Some(c) => (c, format!("target: printed contrast {c}")),
+    let (m_chart, m_chart_err, source) = match contrast {
+        Some(c) => (c, 0.0, format!("target: printed contrast {c}")),
         None => {
-            let (a, lo, hi) = curve::extrapolate_chart_modulation(&points)
+            // Leave out the periods whose estimator window runs past the strip's low end.
+            let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
+            let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles + 2.0, s0, s1);
+            let cm = curve::extrapolate_chart_modulation(&points, s_min)
                 .map_err(|e| Failure::ModulationUnknown(format!("{channel}/{id}: {e}")))?;
             (
-                a,
-                format!("extrapolated to 0 cy/px from {lo:.4}–{hi:.4} cy/px"),
+                cm.value,
+                cm.err,
+                format!(
+                    "extrapolated to 0 cy/px from {:.4}–{:.4} cy/px (± {:.4}{})",
+                    cm.f_lo,
+                    cm.f_hi,
+                    cm.err,
+                    if cm.linear_weight > 0.5 {
+                        ", linear start"
+                    } else {
+                        ""
+                    }
+                ),
             )
         }
     };
     for p in points.iter_mut() {
         p.mtf = p.modulation / m_chart;
-        p.mtf_err /= m_chart;
+        // The chart modulation's own uncertainty scales every point alike.
+        p.mtf_err = (p.mtf_err / m_chart).hypot(p.mtf * m_chart_err / m_chart);
     }
-    let figures = curve::figures(&points);
+    if m_chart_err > MAX_CHART_REL_ERR * m_chart {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the modulation is lost in noise (chart modulation {m_chart:.3} ± {m_chart_err:.3})"
+        )));
+    }
+    let mut figures = curve::figures(&points);
+    // A summary figure where the curve is noisier than ±0.05 is not given.
+    let noisy_at = |f: Option<f64>| -> bool {
+        f.is_some_and(|f| {
+            let near: Vec<f64> = points
+                .iter()
+                .filter(|p| !p.aliased && (p.freq_cy_px - f).abs() <= 0.01)
+                .map(|p| p.mtf_err)
+                .collect();
+            !near.is_empty() && near.iter().sum::<f64>() / near.len() as f64 > 0.05
+        })
+    };
+    for fig in [
+        &mut figures.mtf50_cy_px,
+        &mut figures.mtf30_cy_px,
+        &mut figures.mtf10_cy_px,
+    ] {
+        if noisy_at(*fig) {
+            *fig = None;
+        }
+    }
     let aliasing_from = points.iter().find(|p| p.aliased).map(|p| p.freq_cy_px);
     let across = |s: f64| -> [Point; 2] {
         [
@@ -1275,6 +1361,7 @@ fn measure_strip(
         strip_unit: if target_law.is_some() { "mm" } else { "px" },
         points,
         chart_modulation: m_chart,
+        chart_modulation_err: m_chart_err,
         chart_modulation_source: source,
         figures,
         aliasing_from_cy_px: aliasing_from,
