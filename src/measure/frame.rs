@@ -1,0 +1,219 @@
+//! Frame: from a decoded photo or a raw frame, with its region known, to the
+//! linear planes that binning reads (only the read set is converted; the tone
+//! chosen in [`super::tone`]; raw greens balanced), then [`super::measure_planes`],
+//! with the source, bit depth, tone line, pixel pitch, preview and warnings
+//! filled in. Also the photo's decoding with its pixel pitch resolved.
+
+use super::preview::{make_preview, raw_preview};
+use super::region::{bbox_crop, read_set};
+use super::tone::photo_tone;
+use super::{Failure, MeasureError, MeasureOptions, Measurement, measure_planes};
+use crate::geometry::Point;
+use crate::photo::Plane;
+use crate::photo::decode::{DecodeError, Decoded, decode_bytes};
+use crate::photo::linearise::{Channel, Crop, plane_names, planes_within};
+use crate::target::Target;
+use std::path::Path;
+
+/// Reads and decodes a photo (not a raw), and resolves its pixel pitch from
+/// EXIF and the options: the photo, the options with the pitch, the pitch's warnings.
+pub(super) fn decode_with_pitch(
+    path: &Path,
+    name: &str,
+    opts: &MeasureOptions,
+) -> Result<(Decoded, MeasureOptions, Vec<String>), MeasureError> {
+    let name = name.to_string();
+    let bytes = std::fs::read(path).map_err(|source| MeasureError {
+        path: name.clone(),
+        failure: DecodeError::Io {
+            path: name.clone(),
+            source,
+        }
+        .into(),
+    })?;
+    let dec = decode_bytes(&bytes, &name).map_err(|e| MeasureError {
+        path: name.clone(),
+        failure: e.into(),
+    })?;
+    let facts = crate::photo::exif::facts_from_bytes(&bytes);
+    drop(bytes);
+    let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
+    let o = MeasureOptions {
+        pixel_pitch_mm: pitch.pitch_mm,
+        ..opts.clone()
+    };
+    Ok((dec, o, pitch.warnings))
+}
+
+/// The part of [`measure_raw`] after the region is known: `roi` (frame px)
+/// and the warnings so far.
+pub(super) fn measure_frame_at(
+    frame: &crate::photo::raw::RawFrame,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    mut warnings: Vec<String>,
+) -> Result<Measurement, MeasureError> {
+    use crate::photo::raw::RawChannel;
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    let roi = *roi;
+    if let Some(o) = frame.facts.orientation.filter(|&o| o != 1) {
+        warnings.push(format!(
+            "raw file with EXIF orientation {o}: region and plots are in the stored sensor frame ({}×{} px, not turned)",
+            frame.width, frame.height
+        ));
+    }
+    let rc = match opts.channel {
+        Channel::Luma => {
+            warnings.push(
+                "raw file: measuring the green sites (luminance would need demosaicing); \
+                 use --channel r, g, b or all to choose"
+                    .to_string(),
+            );
+            RawChannel::G
+        }
+        Channel::R => RawChannel::R,
+        Channel::G => RawChannel::G,
+        Channel::B => RawChannel::B,
+        Channel::All => RawChannel::All,
+    };
+    if opts.gamma.is_some() || opts.tone_chart {
+        warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
+    }
+    // Only what binning reads is converted to f32.
+    let (crop, span) =
+        read_set(&roi, target, opts.margin, frame.width, frame.height).map_err(err)?;
+    let mut groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
+    let (greens, green_gain) = if opts.green_balance {
+        balance_green_group(frame, &mut groups, RAW_CLIP)
+    } else {
+        (
+            "; greens as recorded (--no-green-balance)".to_string(),
+            None,
+        )
+    };
+    let pitch =
+        crate::photo::pitch::resolve(&frame.facts, frame.width, frame.height, opts.pixel_pitch_mm);
+    let o = MeasureOptions {
+        pixel_pitch_mm: pitch.pitch_mm,
+        ..opts.clone()
+    };
+    let mut m = measure_planes(
+        &groups,
+        (frame.width, frame.height),
+        &roi,
+        target,
+        &o,
+        RAW_CLIP,
+    )
+    .map_err(err)?;
+    drop(groups);
+    m.preview = raw_preview(frame, &roi);
+    m.source = name.to_string();
+    m.bits = frame.bits_per_sample as u32;
+    m.tone = format!("linear raw (black level removed, white level = 1{greens})");
+    m.green_gain = green_gain;
+    warnings.extend(pitch.warnings);
+    warnings.append(&mut m.warnings);
+    m.warnings = warnings;
+    Ok(m)
+}
+
+/// Linear raw level at and above which a sample counts as clipped (white = 1).
+const RAW_CLIP: f32 = 0.9999;
+
+/// Brings the second green lattice of a Bayer mosaic's green group to the
+/// first's level ([`crate::photo::raw::balance_greens`]); returns what the
+/// summary's tone line says about it ("" when nothing was balanced) and the gain.
+fn balance_green_group(
+    frame: &crate::photo::raw::RawFrame,
+    groups: &mut [(&'static str, Vec<Plane>)],
+    clip: f32,
+) -> (String, Option<f64>) {
+    let (Some(cfa), Some((_, planes))) = (&frame.cfa, groups.iter_mut().find(|g| g.0 == "g"))
+    else {
+        return (String::new(), None);
+    };
+    let [first, second] = planes.as_mut_slice() else {
+        return (String::new(), None);
+    };
+    let Some(b) = crate::photo::raw::balance_greens(first, second, clip) else {
+        return (String::new(), None);
+    };
+    let (w, h) = cfa.size();
+    let name = |p: &Plane| crate::photo::raw::green_name(cfa, (p.offset.0 % w, p.offset.1 % h));
+    let line = format!(
+        "; {} × {:.4} to {}'s level, from {} sites",
+        name(second),
+        b.gain,
+        name(first),
+        b.sites
+    );
+    (line, Some(b.gain))
+}
+
+/// The part of [`measure_decoded`] after the region is known: `roi` (image
+/// px), the refinement's luminance plane `seen` (reused when it holds what
+/// the measurement reads) and the warnings so far.
+pub(super) fn measure_decoded_at(
+    dec: &Decoded,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    seen: Option<(Crop, Plane)>,
+    mut warnings: Vec<String>,
+) -> Result<Measurement, MeasureError> {
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    let roi = *roi;
+    // Crop: the region's bounding box (+2 px).
+    let crop = bbox_crop(&roi, dec.width, dec.height, 2.0);
+    let (tone, tone_desc) =
+        photo_tone(dec, target, opts, crop, &roi, &mut warnings).map_err(err)?;
+    let clip_level = (tone.apply(1.0) * 0.999) as f32;
+    // Convert only what binning reads.
+    let (crop, span) = read_set(&roi, target, opts.margin, dec.width, dec.height).map_err(err)?;
+    // The refinement's plane already holds these samples when the measurement
+    // wants default-tone luminance (or the photo is grey) inside its crop.
+    let same_samples = !opts.tone_chart
+        && opts.gamma.is_none()
+        && (opts.channel == Channel::Luma || dec.channels == 1);
+    let reuse = seen.filter(|(c, _)| {
+        same_samples && c.x0 <= crop.x0 && c.y0 <= crop.y0 && c.x1 >= crop.x1 && c.y1 >= crop.y1
+    });
+    let (ps, preview) = match reuse {
+        Some((_, plane)) => (vec![plane], make_preview(dec, &roi)),
+        None => rayon::join(
+            || planes_within(dec, crop, &tone, opts.channel, &span),
+            || make_preview(dec, &roi),
+        ),
+    };
+    let names = plane_names(opts.channel, dec.channels);
+    let groups: Vec<(&str, Vec<Plane>)> = names
+        .into_iter()
+        .zip(ps.into_iter().map(|p| vec![p]))
+        .collect();
+    let mut m = measure_planes(
+        &groups,
+        (dec.width, dec.height),
+        &roi,
+        target,
+        opts,
+        clip_level,
+    )
+    .map_err(err)?;
+    m.source = name.to_string();
+    m.bits = dec.bits();
+    m.tone = tone_desc;
+    m.preview = preview;
+    warnings.append(&mut m.warnings);
+    m.warnings = warnings;
+    Ok(m)
+}
