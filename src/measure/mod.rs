@@ -98,6 +98,13 @@ pub struct MeasureOptions {
     pub green_balance: bool,
 }
 
+/// Quality gate: least strip width inside the margins (px) for a curve.
+pub const MIN_ACROSS_PX: f64 = 3.0;
+/// Quality gate: largest RMS phase residual of the fitted sweep law (cycles).
+pub const MAX_LAW_RMS_CYCLES: f64 = 0.15;
+/// Quality gate: largest relative uncertainty of an extrapolated chart modulation.
+pub const MAX_CHART_REL_ERR: f64 = 0.03;
+
 /// How far (px) `refine_roi` searches around each given corner.
 pub const REFINE_SEARCH_PX: f64 = 8.0;
 
@@ -160,6 +167,10 @@ pub enum Failure {
     /// The chart's modulation is neither given nor estimable.
     #[error("chart modulation unknown: {0}")]
     ModulationUnknown(String),
+    /// A curve was measured but fails the quality gate (too few samples per
+    /// bin, a poorly fitting phase law, or modulation lost in noise).
+    #[error("curve refused: {0}")]
+    Unreliable(String),
 }
 
 /// A failed measurement: the file and the cause, displayed as one line.
@@ -187,6 +198,8 @@ pub struct Curve {
     pub points: Vec<MtfPoint>,
     /// Chart modulation used for normalisation.
     pub chart_modulation: f64,
+    /// One-sigma uncertainty of `chart_modulation` (0 when printed on the target).
+    pub chart_modulation_err: f64,
     /// Where the chart modulation came from.
     pub chart_modulation_source: String,
     /// Summary figures.

@@ -80,9 +80,28 @@ pub(super) fn refine_or_keep(
                 .zip(&refined)
                 .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
                 .fold(0.0, f64::max);
-            warnings.push(format!(
-                "region corners refined to the edges (moved up to {moved:.2} px)"
-            ));
+            if target.is_some() {
+                warnings.push(format!(
+                    "region corners refined to the edges (moved up to {moved:.2} px)"
+                ));
+            } else {
+                // Split each corner's move into across the strip (long edges fitted
+                // to the edges seen) and along it (ends turned along the bars).
+                let (dx, dy) = (given[1][0] - given[0][0], given[1][1] - given[0][1]);
+                let len = dx.hypot(dy).max(1e-12);
+                let (ux, uy) = (dx / len, dy / len);
+                let (mut along, mut across) = (0.0f64, 0.0f64);
+                for (a, b) in given.iter().zip(&refined) {
+                    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                    along = along.max((ex * ux + ey * uy).abs());
+                    across = across.max((ey * ux - ex * uy).abs());
+                }
+                warnings.push(format!(
+                    "region corners refined to the edges: long edges moved up to {across:.2} px \
+                     across the strip onto the edges seen; ends kept, turned along the printed \
+                     bars (corners slid up to {along:.2} px along the strip)"
+                ));
+            }
             refined
         }
         Err(e) => {

@@ -41,6 +41,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                 "mtf10": freq(c.figures.mtf10_cy_px, m),
                 "mtf_at_nyquist": c.figures.mtf_nyquist,
                 "chart_modulation": c.chart_modulation,
+                "chart_modulation_err": c.chart_modulation_err,
                 "chart_modulation_source": c.chart_modulation_source,
                 "aliasing_from_cy_px": c.aliasing_from_cy_px,
                 "clipped_fraction": c.clipped_fraction,

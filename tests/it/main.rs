@@ -28,6 +28,7 @@ mod locate_timing;
 mod measure_accuracy;
 mod measure_cli;
 mod measure_model;
+mod measure_nuisances;
 mod measure_raw;
 mod measure_realscan;
 mod measure_simulated;
