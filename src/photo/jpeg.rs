@@ -147,8 +147,12 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
     let (w, h) = d
         .dimensions()
         .ok_or_else(|| corrupt("no frame header".into()))?;
-    let (width, rows) = (w, h);
-    let height = cut.map_or(rows, |(f, _)| f.height);
+    let (width, decoded) = (w, h);
+    let height = cut.map_or(decoded, |(f, _)| f.height);
+    // A cut frame's last MCU row is upsampled as an image edge (its chroma has
+    // no row below), so it differs from the whole decode: only the rows above
+    // it are the picture. `cut_height` decodes one MCU row more for this.
+    let rows = cut.map_or(decoded, |(f, _)| decoded - 8 * f.v_max);
     if width == 0 || height == 0 {
         return Err(corrupt("the image has no pixels".into()));
     }
@@ -173,7 +177,7 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
     let opts = options(true).jpeg_set_out_colorspace(out_space);
     d.set_options(opts);
     let mut warnings = Vec::new();
-    if let Err(strict) = d.decode_into(&mut buf[..width * rows * channels]) {
+    if let Err(strict) = d.decode_into(&mut buf[..width * decoded * channels]) {
         if is_unsupported(&strict) {
             return Err(unsupported(strict.to_string()));
         }
@@ -182,7 +186,7 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
             ZCursor::new(input),
             options(false).jpeg_set_out_colorspace(out_space),
         );
-        d.decode_into(&mut buf[..width * rows * channels])
+        d.decode_into(&mut buf[..width * decoded * channels])
             .map_err(|e| corrupt(e.to_string()))?;
         warnings.push(format!(
             "{name}: JPEG scan data is corrupt ({strict}); measured from a lenient decode, damaged blocks may be grey or wrong"

@@ -107,13 +107,37 @@ impl Estimator for Extrema {
             cy[k + 1] = cy[k] + prof.count[k] * prof.y[k];
             cn[k + 1] = cn[k] + prof.count[k];
         }
+        // Bin k spans the phases between the midpoints to its neighbours; the
+        // sums are interpolated linearly inside a bin, so a window of exactly
+        // one period takes fractions of its end bins (a whole-bin window is
+        // biased by up to a bin's share of an extremum).
+        let nb = phases.len();
+        let edge = |k: usize| -> f64 {
+            if k == 0 {
+                phases[0] - 0.5 * (phases[1] - phases[0])
+            } else if k == nb {
+                phases[nb - 1] + 0.5 * (phases[nb - 1] - phases[nb - 2])
+            } else {
+                0.5 * (phases[k - 1] + phases[k])
+            }
+        };
+        let cum = |q: f64, c: &[f64]| -> f64 {
+            // The last edge at or below q.
+            let k = phases.partition_point(|&x| x < q).clamp(1, nb) - 1;
+            let k = if edge(k + 1) <= q { k + 1 } else { k };
+            let k = k.min(nb - 1);
+            let (e0, e1) = (edge(k), edge(k + 1));
+            let t = ((q - e0) / (e1 - e0)).clamp(0.0, 1.0);
+            c[k] + t * (c[k + 1] - c[k])
+        };
         let local_mean = |s: f64| -> Option<f64> {
             let p = law.phase(s);
-            let a = phases.partition_point(|&q| q < p - 0.5);
-            let b = phases.partition_point(|&q| q <= p + 0.5);
-            let n = cn[b] - cn[a];
             // A full period must lie inside the strip.
-            (p - 0.5 >= p_lo && p + 0.5 <= p_hi && n > 0.0).then(|| (cy[b] - cy[a]) / n)
+            if !(p - 0.5 >= p_lo && p + 0.5 <= p_hi) {
+                return None;
+            }
+            let n = cum(p + 0.5, &cn) - cum(p - 0.5, &cn);
+            (n > 0.0).then(|| (cum(p + 0.5, &cy) - cum(p - 0.5, &cy)) / n)
         };
         let mut out = Vec::new();
         for (i, w) in peaks.windows(2).enumerate() {
