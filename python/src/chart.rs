@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::io::Cursor;
 use std::path::PathBuf;
-use sweepmtf::chart::{self, ChartError, ChartSpec, Encoding, Format, Law};
+use sweepmtf::chart::{self as lib_chart, ChartError, ChartSpec, Encoding, Format, Law};
 
 fn chart_err(e: ChartError) -> PyErr {
     match e {
@@ -46,7 +46,11 @@ pub fn chart<'py>(
         "log" => Law::Log,
         "linear" => Law::Linear,
         "patches" => Law::Patches,
-        other => return Err(value_err(format!("law '{other}': use log, linear or patches"))),
+        other => {
+            return Err(value_err(format!(
+                "law '{other}': use log, linear or patches"
+            )));
+        }
     };
     let encoding = match gamma {
         Some(g) if !(g.is_finite() && g > 0.0) => {
@@ -76,9 +80,9 @@ pub fn chart<'py>(
     let shown = path.display().to_string();
     let (laid, preview, bytes) = py
         .detach(|| -> Result<_, ChartError> {
-            let laid = chart::layout(&spec)?;
+            let laid = lib_chart::layout(&spec)?;
             let mut out = Cursor::new(Vec::new());
-            let written = chart::write_chart(&laid, &encoding, format, &mut out, &shown)?;
+            let written = lib_chart::write_chart(&laid, &encoding, format, &mut out, &shown)?;
             Ok((laid, written.preview, out.into_inner()))
         })
         .map_err(chart_err)?;

@@ -4,7 +4,7 @@
 //! text. The Python half (`sweepmtf/__init__.py`) shapes the public API.
 
 use num_complex::Complex64;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -150,7 +150,10 @@ impl NativeMeasurement {
 
 /// Code values of a numpy array (C-contiguous, H×W or H×W×3; uint8, uint16 or
 /// float32) as the library's samples, with (width, height, channels). The one copy.
-fn samples_of(py: Python<'_>, photo: &Bound<'_, PyAny>) -> PyResult<(usize, usize, usize, Samples)> {
+fn samples_of(
+    py: Python<'_>,
+    photo: &Bound<'_, PyAny>,
+) -> PyResult<(usize, usize, usize, Samples)> {
     fn shape(s: &[usize]) -> PyResult<(usize, usize, usize)> {
         match *s {
             [h, w] => Ok((w, h, 1)),
@@ -187,12 +190,49 @@ fn samples_of(py: Python<'_>, photo: &Bound<'_, PyAny>) -> PyResult<(usize, usiz
     }
 }
 
-/// Measures a photo file with options given as JSON.
+thread_local! {
+    /// This (Python) thread's own pools, by thread count: two Python threads
+    /// asking for 1 thread each get one worker each, not one shared worker.
+    static POOLS: std::cell::RefCell<std::collections::HashMap<usize, std::sync::Arc<rayon::ThreadPool>>> =
+        Default::default();
+}
+
+/// Runs `f` on `threads` worker threads of this thread's own pool (None: the global pool).
+fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let Some(n) = threads else {
+        return Ok(f());
+    };
+    if n == 0 {
+        return Err(value_err("threads must be at least 1"));
+    }
+    let pool = POOLS.with(|p| -> PyResult<_> {
+        let mut p = p.borrow_mut();
+        if let Some(pool) = p.get(&n) {
+            return Ok(pool.clone());
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| PyOSError::new_err(format!("cannot start {n} threads: {e}")))?;
+        let pool = std::sync::Arc::new(pool);
+        p.insert(n, pool.clone());
+        Ok(pool)
+    })?;
+    Ok(pool.install(f))
+}
+
+/// Measures a photo file with options given as JSON, on `threads` threads (None: all cores).
 #[pyfunction]
-fn measure_path(py: Python<'_>, path: PathBuf, options_json: &str) -> PyResult<NativeMeasurement> {
+#[pyo3(signature = (path, options_json, threads=None))]
+fn measure_path(
+    py: Python<'_>,
+    path: PathBuf,
+    options_json: &str,
+    threads: Option<usize>,
+) -> PyResult<NativeMeasurement> {
     let opts = options(options_json)?;
     let m = py
-        .detach(|| sweepmtf::measure::measure_file(&path, &opts))
+        .detach(|| with_threads(threads, || sweepmtf::measure::measure_file(&path, &opts)))?
         .map_err(measure_err)?;
     Ok(NativeMeasurement { m })
 }
@@ -200,7 +240,12 @@ fn measure_path(py: Python<'_>, path: PathBuf, options_json: &str) -> PyResult<N
 /// Seconds per call of the library's `measure_file` alone (no Python objects
 /// made), the best of `repeats` calls: the reference for the bindings' overhead.
 #[pyfunction]
-fn time_measure_path(py: Python<'_>, path: PathBuf, options_json: &str, repeats: usize) -> PyResult<f64> {
+fn time_measure_path(
+    py: Python<'_>,
+    path: PathBuf,
+    options_json: &str,
+    repeats: usize,
+) -> PyResult<f64> {
     let opts = options(options_json)?;
     py.detach(|| {
         let mut best = f64::INFINITY;
@@ -216,22 +261,27 @@ fn time_measure_path(py: Python<'_>, path: PathBuf, options_json: &str, repeats:
 
 /// Measures a numpy array (code values) with options given as JSON; `name` stands for it in messages.
 #[pyfunction]
+#[pyo3(signature = (photo, options_json, name, threads=None))]
 fn measure_array(
     py: Python<'_>,
     photo: &Bound<'_, PyAny>,
     options_json: &str,
     name: &str,
+    threads: Option<usize>,
 ) -> PyResult<NativeMeasurement> {
     let opts = options(options_json)?;
     let (w, h, c, samples) = samples_of(py, photo)?;
     let m = py
         .detach(|| {
-            let dec = decoded_from_samples(w, h, c, samples).map_err(|failure| MeasureError {
-                path: name.to_string(),
-                failure,
-            })?;
-            measure_in_memory(&dec, name, &opts)
-        })
+            with_threads(threads, || {
+                let dec =
+                    decoded_from_samples(w, h, c, samples).map_err(|failure| MeasureError {
+                        path: name.to_string(),
+                        failure,
+                    })?;
+                measure_in_memory(&dec, name, &opts)
+            })
+        })?
         .map_err(measure_err)?;
     Ok(NativeMeasurement { m })
 }
@@ -267,7 +317,7 @@ fn located_dicts<'py>(
         .map(|l| {
             let d = PyDict::new(py);
             d.set_item("corners_px", l.corners_px.to_vec())?;
-            let m: Vec<Vec<f64>> = l.homography.m.iter().map(|r| r.to_vec()).collect();
+            let m: Vec<Vec<f64>> = l.homography.m.chunks(3).map(|r| r.to_vec()).collect();
             d.set_item("homography", m)?;
             d.set_item("fiducials", l.fiducials)?;
             d.set_item("hidden", l.hidden)?;
@@ -340,7 +390,8 @@ impl NativeModel {
             name = file.name;
         }
         for (kind, spec) in &specs {
-            let f = parse_factor(kind, spec).map_err(|e| value_err(format!("--{kind} {spec}: {e}")))?;
+            let f =
+                parse_factor(kind, spec).map_err(|e| value_err(format!("--{kind} {spec}: {e}")))?;
             sys.factors.push(f);
         }
         if sys.factors.is_empty() {
@@ -372,7 +423,10 @@ impl NativeModel {
         u: PyReadonlyArray1<'py, f64>,
         v: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<Complex64>>> {
-        let (u, v) = (u.as_slice().map_err(value_err)?, v.as_slice().map_err(value_err)?);
+        let (u, v) = (
+            u.as_slice().map_err(value_err)?,
+            v.as_slice().map_err(value_err)?,
+        );
         if u.len() != v.len() {
             return Err(value_err("u and v differ in length"));
         }
@@ -438,7 +492,10 @@ impl NativeModel {
         }
         let map = py.detach(|| compute_map(&self.system, f_max, size));
         let coords: Vec<f64> = (0..size).map(|i| map.coord(i)).collect();
-        Ok((PyArray1::from_vec(py, map.mtf), PyArray1::from_vec(py, coords)))
+        Ok((
+            PyArray1::from_vec(py, map.mtf),
+            PyArray1::from_vec(py, coords),
+        ))
     }
 }
 

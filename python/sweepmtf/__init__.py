@@ -303,6 +303,7 @@ def measure(
     margin: float = 0.15,
     window_cycles: float = 4.0,
     name: str = "<array>",
+    threads: Optional[int] = None,
 ) -> Measurement:
     """Measures the MTF in a photo of a sine chart, as ``sweepmtf measure``.
 
@@ -321,6 +322,8 @@ def measure(
     refine_roi: refine the roi corners to the region's edges (the CLI's default).
     bin_px, margin, window_cycles: bin width (px), strip margin (fraction), estimator window (cycles).
     name: stands for an array in messages.
+    threads: worker threads for this call (None = all cores); threads=1 with one
+      Python thread per core measures several shots at once.
 
     Raises ValueError (bad arguments), OSError (unreadable files) or
     MeasurementError (no chart or region found, too small, clipped, no oscillation).
@@ -329,12 +332,12 @@ def measure(
         arr = _array(photo)
         opts = _options(roi, target, tone, arr.dtype, method, sweep, channel, pixel_pitch_um,
                         refine_roi, green_balance, chart_index, bin_px, margin, window_cycles)
-        return Measurement(_native.measure_array(arr, opts, name))
+        return Measurement(_native.measure_array(arr, opts, name, threads))
     if not isinstance(photo, (str, os.PathLike)):
         raise ValueError(f"photo must be a path or a numpy array, not {type(photo).__name__}")
     opts = _options(roi, target, tone, None, method, sweep, channel, pixel_pitch_um,
                     refine_roi, green_balance, chart_index, bin_px, margin, window_cycles)
-    return Measurement(_native.measure_path(os.fspath(photo), opts))
+    return Measurement(_native.measure_path(os.fspath(photo), opts, threads))
 
 
 def read_photo(path: PathLike) -> np.ndarray:

@@ -16,7 +16,7 @@ def cli_binary():
     env = os.environ.get("SWEEPMTF_BIN")
     if env:
         return env
-    for profile in ("release", "debug"):
+    for profile in ("debug", "release"):
         p = ROOT / "target" / profile / "sweepmtf"
         if p.exists():
             return str(p)

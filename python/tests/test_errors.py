@@ -13,7 +13,9 @@ def cli_error(cli, *args):
     r = subprocess.run([cli, *args], capture_output=True, text=True)
     assert r.returncode != 0
     line = r.stderr.strip().splitlines()[-1]
-    return line.split("error: ", 1)[1] if "error: " in line else line
+    for prefix in ("sweepmtf: ", "error: "):
+        line = line[len(prefix):] if line.startswith(prefix) else line
+    return line
 
 
 def test_missing_photo_is_oserror_with_the_cli_message(cli, tmp_path):
@@ -134,7 +136,7 @@ def test_model_and_chart_errors(tmp_path):
         sweepmtf.chart(tmp_path / "c.png", 5, 0.5, dpi=72)
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(OSError):
-        sweepmtf.chart(tmp_path / "no" / "dir" / "c.png", 0.5, 5, width_mm=60, height_mm=40, dpi=150)
+        sweepmtf.chart(tmp_path / "no" / "dir" / "c.png", 0.5, 2, width_mm=60, height_mm=40, dpi=150)
     with pytest.raises(ValueError):
         sweepmtf.simulate(ROOT / "targets" / "a4_log.toml", {"width_px": -3})
     with pytest.raises(ValueError):

@@ -66,8 +66,8 @@ def test_simulated_shot_measures_to_its_truth(tmp_path):
 
 
 def test_chart_writes_the_print_and_its_description(tmp_path):
-    r = sweepmtf.chart(tmp_path / "c.png", 0.5, 4.0, width_mm=100, height_mm=60, dpi=150)
-    assert r["width_px"] == round(100 * 150 / 25.4)
+    r = sweepmtf.chart(tmp_path / "c.png", 0.5, 3.0, width_mm=100, height_mm=60, dpi=300)
+    assert r["width_px"] == round(100 * 300 / 25.4)
     assert (tmp_path / "c.png").exists() and (tmp_path / "c.toml").exists()
     assert (tmp_path / "c.preview.png").exists()
     assert r["preview"].ndim == 2 and r["preview"].dtype == np.uint8
