@@ -21,6 +21,7 @@ use thiserror::Error;
 
 pub mod curve;
 pub mod estimate;
+pub mod in_memory;
 pub mod law;
 pub mod model_overlay;
 pub mod patches;

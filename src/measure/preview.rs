@@ -19,6 +19,7 @@ pub(super) fn make_preview(dec: &Decoded, roi: &[Point; 4]) -> Preview {
             *out = match &dec.samples {
                 Samples::U8(v) => v[k],
                 Samples::U16(v) => (v[k] >> 8) as u8,
+                Samples::F32(v) => (v[k].clamp(0.0, 1.0) * 255.0).round() as u8,
             };
         }
         px

@@ -50,6 +50,9 @@ pub enum Samples {
     U8(Vec<u8>),
     /// 16-bit code values (0–65535).
     U16(Vec<u16>),
+    /// Floating-point code values (0 = black, 1 = white), from an array in memory
+    /// (see [`crate::measure::in_memory`]); no file format decodes to these.
+    F32(Vec<f32>),
 }
 
 /// A decoded photo: code values as stored in the file.
@@ -73,11 +76,12 @@ pub struct Decoded {
 }
 
 impl Decoded {
-    /// Bits per sample (8 or 16).
+    /// Bits per sample (8 or 16; 32 for floating-point samples).
     pub fn bits(&self) -> u32 {
         match self.samples {
             Samples::U8(_) => 8,
             Samples::U16(_) => 16,
+            Samples::F32(_) => 32,
         }
     }
 
@@ -87,6 +91,7 @@ impl Decoded {
         match &self.samples {
             Samples::U8(v) => v[i] as f32 / 255.0,
             Samples::U16(v) => v[i] as f32 / 65535.0,
+            Samples::F32(v) => v[i],
         }
     }
 }

@@ -30,7 +30,7 @@ const REAL: [&str; 4] = [
 fn u8s(d: &Decoded) -> &[u8] {
     match &d.samples {
         Samples::U8(v) => v,
-        Samples::U16(_) => panic!("JPEGs are 8-bit"),
+        Samples::U16(_) | Samples::F32(_) => panic!("JPEGs are 8-bit"),
     }
 }
 
