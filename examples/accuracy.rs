@@ -7,6 +7,9 @@
 //! 0.01–0.45 cy/px, the largest local-frequency error (%), and the time of one
 //! measurement (decode + measure) in milliseconds.
 
+#[path = "accuracy/distortion.rs"]
+mod distortion;
+
 use std::time::Instant;
 use sweepmtf::measure::synth::{SynthShot, standard_cases};
 use sweepmtf::measure::{MeasureOptions, Method, measure_decoded};
@@ -167,4 +170,5 @@ fn main() {
             }
         }
     }
+    distortion::table();
 }

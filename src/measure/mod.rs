@@ -10,6 +10,7 @@
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::distortion::{Lens, Ptlens};
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, Samples, decode_bytes, decode_file};
@@ -25,6 +26,7 @@ use thiserror::Error;
 pub mod curve;
 pub mod estimate;
 pub mod law;
+pub mod lens_fit;
 pub mod model_overlay;
 pub mod patches;
 pub mod profile;
@@ -33,6 +35,7 @@ pub mod synth;
 pub use curve::{Figures, MtfPoint};
 pub use estimate::Method;
 pub use law::{LawKind, PhaseLaw};
+pub use lens_fit::{DistortionFound, DistortionSource};
 pub use patches::PatchResult;
 
 use estimate::fit::{PhaseTable, local_fit};
@@ -86,6 +89,14 @@ pub struct MeasureOptions {
     /// Raw Bayer files: scale the second green lattice to the first's level
     /// before binning the greens together ([`crate::photo::raw::balance_greens`]).
     pub green_balance: bool,
+    /// The lens's radial distortion, when known (PTLens a, b, c as Lensfun
+    /// publishes them; [`crate::distortion`]). Photo corners are undistorted
+    /// before the strip's homography and every pixel centre is binned
+    /// through the model.
+    pub distortion: Option<Ptlens>,
+    /// Without `distortion`: estimate it from the strip's straight long edges
+    /// ([`lens_fit`]) and use it when it is clearly there.
+    pub estimate_distortion: bool,
 }
 
 /// How far (px) `refine_roi` searches around each given corner.
@@ -108,6 +119,8 @@ impl Default for MeasureOptions {
             chart_index: None,
             refine_roi: false,
             green_balance: true,
+            distortion: None,
+            estimate_distortion: true,
         }
     }
 }
@@ -238,6 +251,8 @@ pub struct Measurement {
     pub patches: Vec<PatchResult>,
     /// Warnings and notices (one line each).
     pub warnings: Vec<String>,
+    /// The lens distortion given or estimated (None: not looked for, e.g. with a target).
+    pub distortion: Option<DistortionFound>,
     /// Picture of the measured area.
     pub preview: Preview,
 }
@@ -465,8 +480,19 @@ fn measure_frame_at(
         warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
     }
     // Only what binning reads is converted to f32.
-    let (crop, span) =
-        read_set(&roi, target, opts.margin, frame.width, frame.height).map_err(err)?;
+    let distortion = given_distortion(opts, &roi, frame.width, frame.height).map_err(err)?;
+    let lens = distortion
+        .and_then(|d| d.used())
+        .map(|m| Lens::new(m, frame.width, frame.height));
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        frame.width,
+        frame.height,
+    )
+    .map_err(err)?;
     let mut groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
     let (greens, green_gain) = if opts.green_balance {
         balance_green_group(frame, &mut groups, RAW_CLIP)
@@ -482,13 +508,14 @@ fn measure_frame_at(
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    let mut m = measure_planes(
+    let mut m = measure_planes_lens(
         &groups,
         (frame.width, frame.height),
         &roi,
         target,
         &o,
         RAW_CLIP,
+        distortion,
     )
     .map_err(err)?;
     drop(groups);
@@ -699,8 +726,24 @@ fn measure_decoded_at(
         (t, d)
     };
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
+    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
+        let c = bbox_crop(&roi, dec.width, dec.height, DISTORTION_PAD_PX);
+        planes(dec, c, &tone, Channel::Luma).swap_remove(0)
+    })
+    .map_err(err)?;
+    let lens = distortion
+        .and_then(|d| d.used())
+        .map(|m| Lens::new(m, dec.width, dec.height));
     // Convert only what binning reads.
-    let (crop, span) = read_set(&roi, target, opts.margin, dec.width, dec.height).map_err(err)?;
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        dec.width,
+        dec.height,
+    )
+    .map_err(err)?;
     // The refinement's plane already holds these samples when the measurement
     // wants default-tone luminance (or the photo is grey) inside its crop.
     let same_samples = !opts.tone_chart
@@ -721,13 +764,14 @@ fn measure_decoded_at(
         .into_iter()
         .zip(ps.into_iter().map(|p| vec![p]))
         .collect();
-    let mut m = measure_planes(
+    let mut m = measure_planes_lens(
         &groups,
         (dec.width, dec.height),
         &roi,
         target,
         opts,
         clip_level,
+        distortion,
     )
     .map_err(err)?;
     m.source = name.to_string();
@@ -806,28 +850,45 @@ fn bbox_crop(q: &[Point; 4], w: usize, h: usize, pad: f64) -> Crop {
 /// The strips to measure: (id, strip, law from the target, chart modulation from the target).
 type StripSpec = (String, Strip, Option<PhaseLaw>, Option<f64>);
 
-fn strips(roi: &[Point; 4], target: Option<&Target>) -> Result<Vec<StripSpec>, Failure> {
-    match target {
+/// The strips of region `roi` (photo corners); with `lens`, the corners are
+/// undistorted first and each strip carries the lens, so that strip points map
+/// to the photo through the homography and then the distortion.
+fn strips(
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    lens: Option<&Lens>,
+) -> Result<Vec<StripSpec>, Failure> {
+    let photo_roi = roi;
+    let undistorted;
+    let roi = match lens {
+        Some(l) => {
+            undistorted = roi.map(|p| l.undistort(p));
+            &undistorted
+        }
+        None => photo_roi,
+    };
+    let mut out: Vec<StripSpec> = match target {
         None => {
             let d = |a: Point, b: Point| (a[0] - b[0]).hypot(a[1] - b[1]);
             let len = 0.5 * (d(roi[0], roi[1]) + d(roi[3], roi[2]));
             let wid = 0.5 * (d(roi[0], roi[3]) + d(roi[1], roi[2]));
             let h = Homography::from_quads(&rect_corners(0.0, 0.0, len, wid), roi)
                 .map_err(|e| Failure::Region(e.to_string()))?;
-            Ok(vec![(
+            vec![(
                 "strip".into(),
                 Strip {
                     to_image: h,
+                    lens: None,
                     length: len,
                     width: wid,
                 },
                 None,
                 None,
-            )])
+            )]
         }
         Some(t) => {
             let h = target_homography(t, roi)?;
-            Ok(t.sweeps
+            t.sweeps
                 .iter()
                 .map(|sw| {
                     (
@@ -837,9 +898,13 @@ fn strips(roi: &[Point; 4], target: Option<&Target>) -> Result<Vec<StripSpec>, F
                         Some(sw.contrast),
                     )
                 })
-                .collect())
+                .collect()
         }
+    };
+    for sp in out.iter_mut() {
+        sp.1.lens = lens.copied();
     }
+    Ok(out)
 }
 
 /// The image quadrilaterals binning reads: each strip and sine patch inside
@@ -848,10 +913,17 @@ fn binned_quads(
     roi: &[Point; 4],
     target: Option<&Target>,
     margin: f64,
-) -> Result<Vec<[Point; 4]>, Failure> {
+    lens: Option<&Lens>,
+) -> Result<(Vec<[Point; 4]>, f64), Failure> {
     let m = margin.clamp(0.0, 0.45);
     let inner = |st: &Strip| st.image_quad(m * st.width, (1.0 - m) * st.width);
-    let mut quads: Vec<[Point; 4]> = strips(roi, target)?.iter().map(|sp| inner(&sp.1)).collect();
+    let specs = strips(roi, target, lens)?;
+    // How far the distorted regions bow out of their corner quads.
+    let bow = specs
+        .iter()
+        .map(|sp| sp.1.bow_px(m * sp.1.width, (1.0 - m) * sp.1.width))
+        .fold(0.0, f64::max);
+    let mut quads: Vec<[Point; 4]> = specs.iter().map(|sp| inner(&sp.1)).collect();
     if let Some(t) = target
         && !t.patches.is_empty()
     {
@@ -862,7 +934,7 @@ fn binned_quads(
                 .map(|p| inner(&rect_strip(&h, &p.rect, p.direction))),
         );
     }
-    Ok(quads)
+    Ok((quads, bow))
 }
 
 /// What a measurement reads: the crop around the binned regions, and for each
@@ -873,13 +945,15 @@ fn read_set(
     roi: &[Point; 4],
     target: Option<&Target>,
     margin: f64,
+    lens: Option<&Lens>,
     width: usize,
     height: usize,
 ) -> Result<(Crop, impl Fn(usize) -> (usize, usize) + Sync), Failure> {
-    let quads = binned_quads(roi, target, margin)?;
+    let (quads, bow) = binned_quads(roi, target, margin, lens)?;
+    let bow = if bow > 0.0 { bow.ceil() + 1.0 } else { 0.0 };
     let crop = quads
         .iter()
-        .map(|q| bbox_crop(q, width, height, 3.0))
+        .map(|q| bbox_crop(q, width, height, 3.0 + bow))
         .reduce(|a, b| Crop {
             x0: a.x0.min(b.x0),
             y0: a.y0.min(b.y0),
@@ -892,7 +966,7 @@ fn read_set(
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
         for q in &quads {
-            for dy in [-2.0, 0.0, 2.0] {
+            for dy in [-2.0 - bow, 0.0, 2.0 + bow] {
                 if let Some((a, b)) = profile::row_span(q, yc + dy) {
                     lo = lo.min(a);
                     hi = hi.max(b);
@@ -902,7 +976,10 @@ fn read_set(
         if lo > hi {
             (0, 0)
         } else {
-            ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
+            (
+                (lo - 2.0 - bow).max(0.0) as usize,
+                (hi + 3.0 + bow).max(0.0) as usize,
+            )
         }
     };
     Ok((crop, span))
@@ -934,6 +1011,7 @@ pub fn rect_strip(h: &Homography, rect: &crate::target::Rect, dir: Direction) ->
     };
     Strip {
         to_image: h.compose(&s),
+        lens: None,
         length: len,
         width: wid,
     }
@@ -1013,8 +1091,66 @@ pub fn measure_planes(
     opts: &MeasureOptions,
     clip_level: f32,
 ) -> Result<Measurement, Failure> {
+    let distortion = given_distortion(opts, roi, size.0, size.1)?;
+    measure_planes_lens(groups, size, roi, target, opts, clip_level, distortion)
+}
+
+/// The distortion the user gave, checked against the image size (exit 2 with the allowed range).
+fn given_distortion(
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+) -> Result<Option<DistortionFound>, Failure> {
+    let Some(model) = opts.distortion.filter(|d| !d.is_zero()) else {
+        return Ok(None);
+    };
+    Lens::new(model, width, height)
+        .check()
+        .map_err(Failure::Options)?;
+    Ok(Some(lens_fit::given(model, roi, width, height)))
+}
+
+/// The distortion of a shot: as given, or estimated from the strip's edges in
+/// `luma` (a plane reaching at least [`DISTORTION_PAD_PX`] beyond the region),
+/// or none (with a target, or when estimating is off).
+fn resolve_distortion(
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    size: (usize, usize),
+    luma: impl FnOnce() -> Plane,
+) -> Result<Option<DistortionFound>, Failure> {
+    if opts.distortion.is_some() {
+        return given_distortion(opts, roi, size.0, size.1);
+    }
+    if !opts.estimate_distortion || target.is_some() {
+        return Ok(None);
+    }
+    Ok(lens_fit::estimate(&luma(), roi, size.0, size.1))
+}
+
+/// How far beyond the region the plane for the distortion estimate reaches, px.
+const DISTORTION_PAD_PX: f64 = 20.0;
+
+/// [`measure_planes`] with the distortion already resolved.
+fn measure_planes_lens(
+    groups: &[(&str, Vec<Plane>)],
+    size: (usize, usize),
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    clip_level: f32,
+    distortion: Option<DistortionFound>,
+) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
-    let specs = strips(roi, target)?;
+    let lens = distortion
+        .and_then(|d| d.used())
+        .map(|m| Lens::new(m, size.0, size.1));
+    if let Some(d) = &distortion {
+        warnings.push(d.note());
+    }
+    let specs = strips(roi, target, lens.as_ref())?;
     let mut curves = Vec::new();
     let mut patch_rows = Vec::new();
     let bin_opts = BinOptions {
@@ -1084,6 +1220,7 @@ pub fn measure_planes(
         curves,
         patches: patch_rows,
         warnings,
+        distortion,
         preview: Preview::default(),
     })
 }
@@ -1259,8 +1396,8 @@ fn measure_strip(
     let aliasing_from = points.iter().find(|p| p.aliased).map(|p| p.freq_cy_px);
     let across = |s: f64| -> [Point; 2] {
         [
-            strip.to_image.apply([s, opts.margin * strip.width]),
-            strip.to_image.apply([s, (1.0 - opts.margin) * strip.width]),
+            strip.to_photo([s, opts.margin * strip.width]),
+            strip.to_photo([s, (1.0 - opts.margin) * strip.width]),
         ]
     };
     let alias_line = points.iter().find(|p| p.aliased).map(|p| across(p.s));
