@@ -141,19 +141,40 @@ fn sample(plane: &Plane, x: f64, y: f64) -> Option<f64> {
     )
 }
 
-/// Edge points along the chord a→b; `inward` is the unit normal pointing into the strip,
-/// `depth_in` how far (px) the strip reaches inside.
-fn edge_points(plane: &Plane, a: Point, b: Point, inward: Point, depth_in: f64) -> Vec<Point> {
+/// Edge points along the long edge from photo corner `a` to `b`, searched
+/// about the curve that `lens` predicts for it (the chord without one);
+/// `towards` is a point inside the strip, `depth_in` how far (px) the strip
+/// reaches inside.
+fn edge_points(
+    plane: &Plane,
+    (a, b): (Point, Point),
+    (oa, ob): (Point, Point),
+    depth_in: f64,
+    lens: Option<&Lens>,
+) -> Vec<Point> {
     let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-    let dir = [(b[0] - a[0]) / len, (b[1] - a[1]) / len];
+    let on = |a: Point, b: Point, u: f64| -> Point {
+        let (ua, ub) = lens.map_or((a, b), |l| (l.undistort(a), l.undistort(b)));
+        let p = [ua[0] + u * (ub[0] - ua[0]), ua[1] + u * (ub[1] - ua[1])];
+        lens.map_or(p, |l| l.distort(p))
+    };
+    let at = |u: f64| on(a, b, u);
     let h_in = (0.45 * depth_in).clamp(2.0, 16.0);
-    let h_out = 16.0;
+    let h_out = 12.0;
     let step = 0.25;
     let n = ((len / 6.0) as usize).clamp(16, 400);
     let mut out = Vec::new();
     for k in 0..n {
         let u = 0.04 + 0.92 * (k as f64 + 0.5) / n as f64;
-        let c = [a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])];
+        let c = at(u);
+        let (p0, p1) = (at(u - 1e-3), at(u + 1e-3));
+        let tl = (p1[0] - p0[0]).hypot(p1[1] - p0[1]).max(1e-12);
+        let dir = [(p1[0] - p0[0]) / tl, (p1[1] - p0[1]) / tl];
+        let towards = on(oa, ob, u);
+        let mut inward = [-dir[1], dir[0]];
+        if inward[0] * (towards[0] - c[0]) + inward[1] * (towards[1] - c[1]) < 0.0 {
+            inward = [-inward[0], -inward[1]];
+        }
         // d > 0 outwards.
         let nd = ((h_in + h_out) / step) as usize + 1;
         let mut prof = Vec::with_capacity(nd);
@@ -188,7 +209,7 @@ fn edge_points(plane: &Plane, a: Point, b: Point, inward: Point, depth_in: f64) 
             continue;
         }
         let mid = 0.5 * (inside + outside);
-        // The crossing of the mid level nearest the chord.
+        // The crossing of the mid level nearest the predicted edge.
         let mut best: Option<f64> = None;
         for w in prof.windows(2) {
             let (g0, g1) = (w[0].1 - mid, w[1].1 - mid);
@@ -268,26 +289,67 @@ pub fn estimate(
     let mid = |a: Point, b: Point| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
     let (m0, m1) = (mid(roi[0], roi[1]), mid(roi[3], roi[2]));
     let depth = (m1[0] - m0[0]).hypot(m1[1] - m0[1]);
-    let inward = |a: Point, b: Point, towards: Point| -> Point {
-        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-        let n = [-(b[1] - a[1]) / len, (b[0] - a[0]) / len];
-        let c = mid(a, b);
-        if n[0] * (towards[0] - c[0]) + n[1] * (towards[1] - c[1]) >= 0.0 {
-            n
-        } else {
-            [-n[0], -n[1]]
-        }
-    };
-    let mut edges = [
-        edge_points(plane, roi[0], roi[1], inward(roi[0], roi[1], m1), depth),
-        edge_points(plane, roi[3], roi[2], inward(roi[3], roi[2], m0), depth),
-    ];
-    if edges.iter().any(|e| e.len() < 8) {
-        return None;
-    }
     let rc2 = (width as f64 / 2.0).hypot(height as f64 / 2.0).powi(2)
         / (width.min(height) as f64 / 2.0).powi(2);
     let b_max = MAX_CORNER_PERCENT / 100.0 / (rc2 - 1.0).max(0.05);
+    // Edge points about the chords, then (when the edges bow) again about the
+    // curves a first fit predicts: strong distortion bends an edge far off its chord.
+    let mut lens: Option<Lens> = None;
+    let mut result = None;
+    for _ in 0..3 {
+        let edges = [
+            edge_points(
+                plane,
+                (roi[0], roi[1]),
+                (roi[3], roi[2]),
+                depth,
+                lens.as_ref(),
+            ),
+            edge_points(
+                plane,
+                (roi[3], roi[2]),
+                (roi[0], roi[1]),
+                depth,
+                lens.as_ref(),
+            ),
+        ];
+        let Some(found) = fit_edges(edges, roi, width, height, b_max) else {
+            return result;
+        };
+        let next = Lens::new(found.model, width, height);
+        let bow = found.bow_px;
+        let moved = lens.map_or(bow, |l: Lens| {
+            let nb = Lens::new(
+                Ptlens {
+                    a: 0.0,
+                    b: found.model.b - l.model.b,
+                    c: 0.0,
+                },
+                width,
+                height,
+            );
+            long_edge_bow(&nb, roi)
+        });
+        result = Some(found);
+        if moved < 2.0 {
+            break;
+        }
+        lens = Some(next);
+    }
+    result
+}
+
+/// Fits b to the edge points of both long edges (see the module's text).
+fn fit_edges(
+    mut edges: [Vec<Point>; 2],
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+    b_max: f64,
+) -> Option<DistortionFound> {
+    if edges.iter().any(|e| e.len() < 8) {
+        return None;
+    }
     let mut fit = (0.0, 0.0, 0.0);
     for round in 0..2 {
         let mut b = 0.0;
