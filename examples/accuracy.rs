@@ -10,6 +10,9 @@
 //! 4:2:0; `synth::nuisance_cases(0)`) with the CLI's defaults (refinement on),
 //! adding the MTF50 error and the chart modulation found (printed 0.800).
 
+#[path = "accuracy/distortion.rs"]
+mod distortion;
+
 use std::time::Instant;
 use sweepmtf::measure::synth::{SynthShot, nuisance_cases, standard_cases};
 use sweepmtf::measure::{MeasureOptions, Method, measure_decoded};
@@ -225,4 +228,5 @@ fn main() {
             }
         }
     }
+    distortion::table();
 }

@@ -7,12 +7,16 @@
 use super::preview::{make_preview, raw_preview};
 use super::region::{bbox_crop, read_set};
 use super::tone::photo_tone;
-use super::{Failure, MeasureError, MeasureOptions, Measurement, measure_planes};
+use super::{
+    DISTORTION_PAD_PX, Failure, MeasureError, MeasureOptions, Measurement, given_distortion,
+    measure_planes_lens, resolve_distortion,
+};
+use crate::distortion::Lens;
 use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
 use crate::photo::jpeg::JpegWant;
-use crate::photo::linearise::{Channel, Crop, plane_names, planes_within};
+use crate::photo::linearise::{Channel, Crop, plane_names, planes, planes_within};
 use crate::target::Target;
 use std::path::Path;
 
@@ -105,8 +109,19 @@ pub(super) fn measure_frame_at(
         warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
     }
     // Only what binning reads is converted to f32.
-    let (crop, span) =
-        read_set(&roi, target, opts.margin, frame.width, frame.height).map_err(err)?;
+    let distortion = given_distortion(opts, &roi, frame.width, frame.height).map_err(err)?;
+    let lens = distortion
+        .and_then(|d| d.used())
+        .map(|m| Lens::new(m, frame.width, frame.height));
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        frame.width,
+        frame.height,
+    )
+    .map_err(err)?;
     let mut groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
     let (greens, green_gain) = if opts.green_balance {
         balance_green_group(frame, &mut groups, RAW_CLIP)
@@ -122,13 +137,14 @@ pub(super) fn measure_frame_at(
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    let mut m = measure_planes(
+    let mut m = measure_planes_lens(
         &groups,
         (frame.width, frame.height),
         &roi,
         target,
         &o,
         RAW_CLIP,
+        distortion,
     )
     .map_err(err)?;
     drop(groups);
@@ -198,8 +214,24 @@ pub(super) fn measure_decoded_at(
     let (tone, tone_desc) =
         photo_tone(dec, target, opts, crop, &roi, &mut warnings).map_err(err)?;
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
+    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
+        let c = bbox_crop(&roi, dec.width, dec.height, DISTORTION_PAD_PX);
+        planes(dec, c, &tone, Channel::Luma).swap_remove(0)
+    })
+    .map_err(err)?;
+    let lens = distortion
+        .and_then(|d| d.used())
+        .map(|m| Lens::new(m, dec.width, dec.height));
     // Convert only what binning reads.
-    let (crop, span) = read_set(&roi, target, opts.margin, dec.width, dec.height).map_err(err)?;
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        dec.width,
+        dec.height,
+    )
+    .map_err(err)?;
     // The refinement's plane already holds these samples when the measurement
     // wants default-tone luminance (or the photo is grey) inside its crop.
     let same_samples = !opts.tone_chart
@@ -220,13 +252,14 @@ pub(super) fn measure_decoded_at(
         .into_iter()
         .zip(ps.into_iter().map(|p| vec![p]))
         .collect();
-    let mut m = measure_planes(
+    let mut m = measure_planes_lens(
         &groups,
         (dec.width, dec.height),
         &roi,
         target,
         opts,
         clip_level,
+        distortion,
     )
     .map_err(err)?;
     m.source = name.to_string();

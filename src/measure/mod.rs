@@ -10,6 +10,7 @@
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::distortion::{Lens, Ptlens};
 use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_file};
@@ -23,6 +24,7 @@ pub mod curve;
 pub mod estimate;
 pub mod in_memory;
 pub mod law;
+pub mod lens_fit;
 pub mod model_overlay;
 pub mod patches;
 pub mod profile;
@@ -39,6 +41,7 @@ mod tone;
 pub use curve::{Figures, MtfPoint};
 pub use estimate::Method;
 pub use law::{LawKind, PhaseLaw};
+pub use lens_fit::{DistortionFound, DistortionSource};
 pub use patches::PatchResult;
 pub use region::{rect_strip, target_homography};
 
@@ -97,6 +100,16 @@ pub struct MeasureOptions {
     /// Raw Bayer files: scale the second green lattice to the first's level
     /// before binning the greens together ([`crate::photo::raw::balance_greens`]).
     pub green_balance: bool,
+    /// The lens's radial distortion, when known (PTLens a, b, c as Lensfun
+    /// publishes them; [`crate::distortion`]). Photo corners are undistorted
+    /// before the strip's homography and every pixel centre is binned
+    /// through the model.
+    pub distortion: Option<Ptlens>,
+    /// Without `distortion`: estimate it from the strip's straight long edges
+    /// ([`lens_fit`]) and use it when it is clearly there. Off by default: on
+    /// strips without printed edges around them (the synthetic accuracy
+    /// shots) the estimate misfires and the sweep is then not followed.
+    pub estimate_distortion: bool,
 }
 
 /// Quality gate: least strip width inside the margins (px) for a curve.
@@ -126,6 +139,8 @@ impl Default for MeasureOptions {
             chart_index: None,
             refine_roi: false,
             green_balance: true,
+            distortion: None,
+            estimate_distortion: false,
         }
     }
 }
@@ -262,6 +277,8 @@ pub struct Measurement {
     pub patches: Vec<PatchResult>,
     /// Warnings and notices (one line each).
     pub warnings: Vec<String>,
+    /// The lens distortion given or estimated (None: not looked for, e.g. with a target).
+    pub distortion: Option<DistortionFound>,
     /// Picture of the measured area.
     pub preview: Preview,
 }
@@ -484,8 +501,66 @@ pub fn measure_planes(
     opts: &MeasureOptions,
     clip_level: f32,
 ) -> Result<Measurement, Failure> {
+    let distortion = given_distortion(opts, roi, size.0, size.1)?;
+    measure_planes_lens(groups, size, roi, target, opts, clip_level, distortion)
+}
+
+/// The distortion the user gave, checked against the image size (exit 2 with the allowed range).
+fn given_distortion(
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+) -> Result<Option<DistortionFound>, Failure> {
+    let Some(model) = opts.distortion.filter(|d| !d.is_zero()) else {
+        return Ok(None);
+    };
+    Lens::new(model, width, height)
+        .check()
+        .map_err(Failure::Options)?;
+    Ok(Some(lens_fit::given(model, roi, width, height)))
+}
+
+/// The distortion of a shot: as given, or estimated from the strip's edges in
+/// `luma` (a plane reaching at least [`DISTORTION_PAD_PX`] beyond the region),
+/// or none (with a target, or when estimating is off).
+fn resolve_distortion(
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    size: (usize, usize),
+    luma: impl FnOnce() -> Plane,
+) -> Result<Option<DistortionFound>, Failure> {
+    if opts.distortion.is_some() {
+        return given_distortion(opts, roi, size.0, size.1);
+    }
+    if !opts.estimate_distortion || target.is_some() {
+        return Ok(None);
+    }
+    Ok(lens_fit::estimate(&luma(), roi, size.0, size.1))
+}
+
+/// How far beyond the region the plane for the distortion estimate reaches, px.
+const DISTORTION_PAD_PX: f64 = 20.0;
+
+/// [`measure_planes`] with the distortion already resolved.
+fn measure_planes_lens(
+    groups: &[(&str, Vec<Plane>)],
+    size: (usize, usize),
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    clip_level: f32,
+    distortion: Option<DistortionFound>,
+) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
-    let specs = strips(roi, target)?;
+    let lens = distortion
+        .and_then(|d| d.used())
+        .map(|m| Lens::new(m, size.0, size.1));
+    if let Some(d) = &distortion {
+        warnings.push(d.note());
+    }
+    let specs = strips(roi, target, lens.as_ref())?;
     let mut curves = Vec::new();
     let mut patch_rows = Vec::new();
     let bin_opts = BinOptions {
@@ -555,6 +630,7 @@ pub fn measure_planes(
         curves,
         patches: patch_rows,
         warnings,
+        distortion,
         preview: Preview::default(),
     })
 }

@@ -220,8 +220,8 @@ pub(super) fn measure_strip(
     let aliasing_from = points.iter().find(|p| p.aliased).map(|p| p.freq_cy_px);
     let across = |s: f64| -> [Point; 2] {
         [
-            strip.to_image.apply([s, opts.margin * strip.width]),
-            strip.to_image.apply([s, (1.0 - opts.margin) * strip.width]),
+            strip.to_photo([s, opts.margin * strip.width]),
+            strip.to_photo([s, (1.0 - opts.margin) * strip.width]),
         ]
     };
     let alias_line = points.iter().find(|p| p.aliased).map(|p| across(p.s));
