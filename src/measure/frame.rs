@@ -11,7 +11,6 @@ use super::{
     DISTORTION_PAD_PX, Failure, MeasureError, MeasureOptions, Measurement, given_distortion,
     measure_planes_lens, resolve_distortion,
 };
-use crate::distortion::Lens;
 use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
@@ -110,9 +109,7 @@ pub(super) fn measure_frame_at(
     }
     // Only what binning reads is converted to f32.
     let distortion = given_distortion(opts, &roi, frame.width, frame.height).map_err(err)?;
-    let lens = distortion
-        .and_then(|d| d.used())
-        .map(|m| Lens::new(m, frame.width, frame.height));
+    let lens = distortion.and_then(|d| d.lens(frame.width, frame.height));
     let (crop, span) = read_set(
         &roi,
         target,
@@ -219,9 +216,7 @@ pub(super) fn measure_decoded_at(
         planes(dec, c, &tone, Channel::Luma).swap_remove(0)
     })
     .map_err(err)?;
-    let lens = distortion
-        .and_then(|d| d.used())
-        .map(|m| Lens::new(m, dec.width, dec.height));
+    let lens = distortion.and_then(|d| d.lens(dec.width, dec.height));
     // Convert only what binning reads.
     let (crop, span) = read_set(
         &roi,

@@ -63,6 +63,12 @@ impl DistortionFound {
         (self.source != DistortionSource::Negligible).then_some(self.model)
     }
 
+    /// The lens the measurement bins through in a `width`×`height` px image, when used.
+    pub fn lens(&self, width: usize, height: usize) -> Option<crate::distortion::Lens> {
+        self.used()
+            .map(|m| crate::distortion::Lens::new(m, width, height))
+    }
+
     /// One line for the notes.
     pub fn note(&self) -> String {
         let m = &self.model;

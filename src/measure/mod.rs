@@ -554,9 +554,7 @@ fn measure_planes_lens(
     distortion: Option<DistortionFound>,
 ) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
-    let lens = distortion
-        .and_then(|d| d.used())
-        .map(|m| Lens::new(m, size.0, size.1));
+    let lens = distortion.and_then(|d| d.lens(size.0, size.1));
     if let Some(d) = &distortion {
         warnings.push(d.note());
     }
