@@ -98,6 +98,11 @@ pub fn of_decoded(d: &Decoded) -> Rendition {
         Samples::U16(v) => tone_map(&boxed(d.width, d.height, d.channels, k, |i| {
             v[i] as f32 / 65535.0
         })),
+        // Float code values (0 = black, 1 = white), as for display.
+        Samples::F32(v) => boxed(d.width, d.height, d.channels, k, |i| v[i] * 255.0)
+            .iter()
+            .map(|&x| x.round().clamp(0.0, 255.0) as u8)
+            .collect(),
     };
     Rendition {
         jpeg: jpeg(&rgb, w, h),

@@ -11,12 +11,13 @@ use super::session::{self, Photo, Source, TargetChoice};
 use crate::cli::measure_flags::{MeasureFlags, parse_channel, parse_method, parse_sweep};
 use crate::cli::measure_model::{ModelArgs, prepare_with};
 use crate::cli::{CliError, Code};
+use clap::Parser;
 use serde::Deserialize;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
-use sweepmtf::measure::{MeasureError, MeasureOptions, Measurement, measure_decoded, measure_raw};
+use sweepmtf::measure::{MeasureError, MeasureOptions, Measurement, measure_bytes, measure_raw};
 use sweepmtf::report::json::{Timings, summary};
 use sweepmtf::report::mtf_plot::PlotFormat;
 
@@ -98,11 +99,10 @@ pub fn upload(s: &Server, name: &str, bytes: Vec<u8>) -> Reply {
         );
     }
     let t = Instant::now();
-    let p = match session::from_bytes(&bytes, name) {
+    let p = match session::from_bytes(bytes, name) {
         Ok(p) => p,
         Err(e) => return Reply::error(422, Code::Input as u8, e),
     };
-    drop(bytes);
     let mut ses = s.session.lock().unwrap_or_else(|e| e.into_inner());
     ses.photos.push(Arc::new(p));
     let id = ses.photos.len() - 1;
@@ -130,6 +130,13 @@ struct MeasureReq {
     chart_index: Option<usize>,
     /// Output folder for `/api/save` (default: the one given to `sweepmtf gui`).
     out_dir: Option<String>,
+}
+
+/// `measure`'s flags alone, to read their defaults from the one place they are declared.
+#[derive(clap::Parser)]
+struct Defaults {
+    #[command(flatten)]
+    flags: MeasureFlags,
 }
 
 /// What a request resolves to: the photo, target, options and the flags as typed.
@@ -171,24 +178,20 @@ fn job(s: &Server, r: &MeasureReq) -> Result<Job, Reply> {
     let channel =
         parsed("channel", &r.channel, parse_channel, Default::default()).map_err(Reply::cli)?;
     let sweep = parsed("sweep", &r.sweep, parse_sweep, Default::default()).map_err(Reply::cli)?;
-    let flags = MeasureFlags {
-        roi: r.roi,
-        target: target.as_ref().map(|t| PathBuf::from(&t.arg)),
-        no_refine_roi: !r.refine,
-        refine_roi: false,
-        no_green_balance: false,
-        chart_index: r.chart_index,
-        method,
-        sweep,
-        gamma: r.gamma,
-        tone: None,
-        channel,
-        pixel_pitch: r.pixel_pitch.clone().filter(|p| !p.trim().is_empty()),
-        plot: PlotFormat::Png,
-        bin_px: 0.25,
-        margin: 0.15,
-        window: 4.0,
+    // `measure`'s own defaults for every flag the page does not set.
+    let mut flags = match Defaults::try_parse_from(["measure"]) {
+        Ok(d) => d.flags,
+        Err(e) => return Err(Reply::error(500, 1, e.to_string())),
     };
+    flags.roi = r.roi;
+    flags.target = target.as_ref().map(|t| PathBuf::from(&t.arg));
+    flags.no_refine_roi = !r.refine;
+    flags.chart_index = r.chart_index;
+    flags.method = method;
+    flags.sweep = sweep;
+    flags.gamma = r.gamma;
+    flags.channel = channel;
+    flags.pixel_pitch = r.pixel_pitch.clone().filter(|p| !p.trim().is_empty());
     let opts = flags.options().map_err(Reply::cli)?;
     let mut args = vec![photo.name.clone()];
     if let Some(t) = &target {
@@ -230,21 +233,7 @@ fn run(j: &Job) -> Result<Measurement, MeasureError> {
     let target = j.target.as_ref().map(|t| &t.target);
     match &j.photo.source {
         Source::Raw(path) => measure_raw(path, &j.photo.name, target, &j.opts),
-        Source::Decoded(dec) => {
-            let pitch = sweepmtf::photo::pitch::resolve(
-                &j.photo.facts,
-                dec.width,
-                dec.height,
-                j.opts.pixel_pitch_mm,
-            );
-            let o = MeasureOptions {
-                pixel_pitch_mm: pitch.pitch_mm,
-                ..j.opts.clone()
-            };
-            let mut m = measure_decoded(dec, &j.photo.name, target, &o)?;
-            m.warnings.extend(pitch.warnings);
-            Ok(m)
-        }
+        Source::File(bytes) => measure_bytes(bytes, &j.photo.name, target, &j.opts),
     }
 }
 

@@ -5,14 +5,15 @@ use super::display::{self, Rendition};
 use super::{GuiConfig, GuiError};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use sweepmtf::photo::decode::{Decoded, decode_bytes};
+use sweepmtf::photo::decode::decode_bytes;
 use sweepmtf::photo::exif::{ExifFacts, facts_from_bytes};
 use sweepmtf::target::Target;
 
 /// Where a photo's full-resolution data is.
 pub enum Source {
-    /// A decoded JPEG, PNG or TIFF, in memory.
-    Decoded(Decoded),
+    /// A JPEG, PNG or TIFF file's bytes, in memory (decoded for each
+    /// measurement as `measure` decodes the file: only what it reads).
+    File(Vec<u8>),
     /// A camera raw file named on the command line (measured from the file).
     Raw(PathBuf),
 }
@@ -155,19 +156,20 @@ fn open_path(path: &Path) -> Result<Photo, String> {
         });
     }
     let bytes = std::fs::read(path).map_err(|e| format!("{name}: {e}"))?;
-    from_bytes(&bytes, name)
+    from_bytes(bytes, name)
 }
 
-/// Decodes an uploaded or read JPEG/PNG/TIFF; `name` is used in messages.
-pub fn from_bytes(bytes: &[u8], name: String) -> Result<Photo, String> {
-    let dec = decode_bytes(bytes, &name).map_err(|e| e.to_string())?;
-    let facts = facts_from_bytes(bytes);
+/// Keeps an uploaded or read JPEG/PNG/TIFF, decoded once for its display
+/// rendition; `name` is used in messages.
+pub fn from_bytes(bytes: Vec<u8>, name: String) -> Result<Photo, String> {
+    let dec = decode_bytes(&bytes, &name).map_err(|e| e.to_string())?;
+    let facts = facts_from_bytes(&bytes);
     Ok(Photo {
         stem: stem_of(&name),
         width: dec.width,
         height: dec.height,
         display: display::of_decoded(&dec),
-        source: Source::Decoded(dec),
+        source: Source::File(bytes),
         facts,
         name,
     })

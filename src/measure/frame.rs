@@ -7,11 +7,15 @@
 use super::preview::{make_preview, raw_preview};
 use super::region::{bbox_crop, read_set};
 use super::tone::photo_tone;
-use super::{Failure, MeasureError, MeasureOptions, Measurement, measure_planes};
+use super::{
+    DISTORTION_PAD_PX, Failure, MeasureError, MeasureOptions, Measurement, given_distortion,
+    measure_planes_lens, resolve_distortion,
+};
 use crate::geometry::Point;
 use crate::photo::Plane;
-use crate::photo::decode::{DecodeError, Decoded, decode_bytes};
-use crate::photo::linearise::{Channel, Crop, plane_names, planes_within};
+use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
+use crate::photo::jpeg::JpegWant;
+use crate::photo::linearise::{Channel, Crop, plane_names, planes, planes_within};
 use crate::target::Target;
 use std::path::Path;
 
@@ -22,27 +26,57 @@ pub(super) fn decode_with_pitch(
     name: &str,
     opts: &MeasureOptions,
 ) -> Result<(Decoded, MeasureOptions, Vec<String>), MeasureError> {
-    let name = name.to_string();
-    let bytes = std::fs::read(path).map_err(|source| MeasureError {
-        path: name.clone(),
+    decode_bytes_with_pitch(&read_photo(path, name)?, name, opts)
+}
+
+/// Reads a photo file's bytes (`name` in the error).
+pub(super) fn read_photo(path: &Path, name: &str) -> Result<Vec<u8>, MeasureError> {
+    std::fs::read(path).map_err(|source| MeasureError {
+        path: name.to_string(),
         failure: DecodeError::Io {
-            path: name.clone(),
+            path: name.to_string(),
             source,
         }
         .into(),
-    })?;
-    let dec = decode_bytes(&bytes, &name).map_err(|e| MeasureError {
-        path: name.clone(),
+    })
+}
+
+/// [`decode_with_pitch`] of a photo file's bytes already in memory.
+pub(super) fn decode_bytes_with_pitch(
+    bytes: &[u8],
+    name: &str,
+    opts: &MeasureOptions,
+) -> Result<(Decoded, MeasureOptions, Vec<String>), MeasureError> {
+    let dec = decode_bytes_want(bytes, name, jpeg_want(opts)).map_err(|e| MeasureError {
+        path: name.to_string(),
         failure: e.into(),
     })?;
-    let facts = crate::photo::exif::facts_from_bytes(&bytes);
-    drop(bytes);
+    let facts = crate::photo::exif::facts_from_bytes(bytes);
     let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
     let o = MeasureOptions {
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    Ok((dec, o, pitch.warnings))
+    let mut warnings = dec.warnings.clone();
+    warnings.extend(pitch.warnings);
+    Ok((dec, o, warnings))
+}
+
+/// Rows below the region's lowest corner that a measurement may still read
+/// (corner refinement's search and crop, the binned rows' padding), px.
+const ROWS_BELOW_ROI: f64 = 64.0;
+
+/// What of a JPEG the measurement reads: with corners given, the rows down
+/// to just below the region; for a luminance measurement without a tone
+/// curve from the chart, the luma plane alone (see `photo::jpeg`).
+fn jpeg_want(opts: &MeasureOptions) -> JpegWant {
+    JpegWant {
+        rows: opts.roi.map(|q| {
+            let ymax = q.iter().map(|p| p[1]).fold(0.0, f64::max);
+            (ymax + ROWS_BELOW_ROI).ceil().max(0.0) as usize
+        }),
+        luma_only: opts.channel == Channel::Luma && !opts.tone_chart,
+    }
 }
 
 /// The part of [`measure_raw`] after the region is known: `roi` (frame px)
@@ -85,8 +119,17 @@ pub(super) fn measure_frame_at(
         warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
     }
     // Only what binning reads is converted to f32.
-    let (crop, span) =
-        read_set(&roi, target, opts.margin, frame.width, frame.height).map_err(err)?;
+    let distortion = given_distortion(opts, &roi, frame.width, frame.height).map_err(err)?;
+    let lens = distortion.and_then(|d| d.lens(frame.width, frame.height));
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        frame.width,
+        frame.height,
+    )
+    .map_err(err)?;
     let mut groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
     let (greens, green_gain) = if opts.green_balance {
         balance_green_group(frame, &mut groups, RAW_CLIP)
@@ -102,13 +145,14 @@ pub(super) fn measure_frame_at(
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    let mut m = measure_planes(
+    let mut m = measure_planes_lens(
         &groups,
         (frame.width, frame.height),
         &roi,
         target,
         &o,
         RAW_CLIP,
+        distortion,
     )
     .map_err(err)?;
     drop(groups);
@@ -178,8 +222,22 @@ pub(super) fn measure_decoded_at(
     let (tone, tone_desc) =
         photo_tone(dec, target, opts, crop, &roi, &mut warnings).map_err(err)?;
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
+    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
+        let c = bbox_crop(&roi, dec.width, dec.height, DISTORTION_PAD_PX);
+        planes(dec, c, &tone, Channel::Luma).swap_remove(0)
+    })
+    .map_err(err)?;
+    let lens = distortion.and_then(|d| d.lens(dec.width, dec.height));
     // Convert only what binning reads.
-    let (crop, span) = read_set(&roi, target, opts.margin, dec.width, dec.height).map_err(err)?;
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        dec.width,
+        dec.height,
+    )
+    .map_err(err)?;
     // The refinement's plane already holds these samples when the measurement
     // wants default-tone luminance (or the photo is grey) inside its crop.
     let same_samples = !opts.tone_chart
@@ -200,13 +258,14 @@ pub(super) fn measure_decoded_at(
         .into_iter()
         .zip(ps.into_iter().map(|p| vec![p]))
         .collect();
-    let mut m = measure_planes(
+    let mut m = measure_planes_lens(
         &groups,
         (dec.width, dec.height),
         &roi,
         target,
         opts,
         clip_level,
+        distortion,
     )
     .map_err(err)?;
     m.source = name.to_string();

@@ -5,11 +5,12 @@
 //! targets give one result per patch ([`patches`]).
 //!
 //! Entry points: [`measure_file`] (decode + measure; safe to call from many
-//! threads), [`measure_decoded`] and [`measure_planes`] (for planes that
+//! threads), [`measure_bytes`] (the same for a file's bytes in memory), [`measure_decoded`] and [`measure_planes`] (for planes that
 //! another decoder, e.g. camera raw, produced).
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::distortion::{Lens, Ptlens};
 use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_file};
@@ -21,7 +22,9 @@ use thiserror::Error;
 
 pub mod curve;
 pub mod estimate;
+pub mod in_memory;
 pub mod law;
+pub mod lens_fit;
 pub mod model_overlay;
 pub mod patches;
 pub mod profile;
@@ -38,10 +41,13 @@ mod tone;
 pub use curve::{Figures, MtfPoint};
 pub use estimate::Method;
 pub use law::{LawKind, PhaseLaw};
+pub use lens_fit::{DistortionFound, DistortionSource};
 pub use patches::PatchResult;
 pub use region::{rect_strip, target_homography};
 
-use frame::{decode_with_pitch, measure_decoded_at, measure_frame_at};
+use frame::{
+    decode_bytes_with_pitch, decode_with_pitch, measure_decoded_at, measure_frame_at, read_photo,
+};
 use profile::BinOptions;
 use region::{
     bbox_crop, found_warnings, full_grey, locate_region, location_failed, raw_read_window,
@@ -96,7 +102,24 @@ pub struct MeasureOptions {
     /// Raw Bayer files: scale the second green lattice to the first's level
     /// before binning the greens together ([`crate::photo::raw::balance_greens`]).
     pub green_balance: bool,
+    /// The lens's radial distortion, when known (PTLens a, b, c as Lensfun
+    /// publishes them; [`crate::distortion`]). Photo corners are undistorted
+    /// before the strip's homography and every pixel centre is binned
+    /// through the model.
+    pub distortion: Option<Ptlens>,
+    /// Without `distortion`: estimate it from the strip's straight long edges
+    /// ([`lens_fit`]) and use it when it is clearly there. Off by default: on
+    /// strips without printed edges around them (the synthetic accuracy
+    /// shots) the estimate misfires and the sweep is then not followed.
+    pub estimate_distortion: bool,
 }
+
+/// Quality gate: least strip width inside the margins (px) for a curve.
+pub const MIN_ACROSS_PX: f64 = 3.0;
+/// Quality gate: largest RMS phase residual of the fitted sweep law (cycles).
+pub const MAX_LAW_RMS_CYCLES: f64 = 0.15;
+/// Quality gate: largest relative uncertainty of an extrapolated chart modulation.
+pub const MAX_CHART_REL_ERR: f64 = 0.03;
 
 /// How far (px) `refine_roi` searches around each given corner.
 pub const REFINE_SEARCH_PX: f64 = 8.0;
@@ -118,6 +141,8 @@ impl Default for MeasureOptions {
             chart_index: None,
             refine_roi: false,
             green_balance: true,
+            distortion: None,
+            estimate_distortion: false,
         }
     }
 }
@@ -160,6 +185,10 @@ pub enum Failure {
     /// The chart's modulation is neither given nor estimable.
     #[error("chart modulation unknown: {0}")]
     ModulationUnknown(String),
+    /// A curve was measured but fails the quality gate (too few samples per
+    /// bin, a poorly fitting phase law, or modulation lost in noise).
+    #[error("curve refused: {0}")]
+    Unreliable(String),
 }
 
 /// A failed measurement: the file and the cause, displayed as one line.
@@ -187,6 +216,8 @@ pub struct Curve {
     pub points: Vec<MtfPoint>,
     /// Chart modulation used for normalisation.
     pub chart_modulation: f64,
+    /// One-sigma uncertainty of `chart_modulation` (0 when printed on the target).
+    pub chart_modulation_err: f64,
     /// Where the chart modulation came from.
     pub chart_modulation_source: String,
     /// Summary figures.
@@ -248,6 +279,8 @@ pub struct Measurement {
     pub patches: Vec<PatchResult>,
     /// Warnings and notices (one line each).
     pub warnings: Vec<String>,
+    /// The lens distortion given or estimated (None: not looked for, e.g. with a target).
+    pub distortion: Option<DistortionFound>,
     /// Picture of the measured area.
     pub preview: Preview,
 }
@@ -262,8 +295,21 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
     if crate::photo::raw::is_raw_path(path) {
         return measure_raw(path, &name, target.as_ref(), opts);
     }
-    let (dec, o, pitch_warnings) = decode_with_pitch(path, &name, opts)?;
-    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o)?;
+    measure_bytes(&read_photo(path, &name)?, &name, target.as_ref(), opts)
+}
+
+/// Measures a photo file (JPEG, PNG or TIFF, not a raw) whose bytes are
+/// already in memory, exactly as [`measure_file`] measures it from disk
+/// (same decoding, EXIF pixel pitch and warnings); `name` is used in
+/// messages and the outputs, `target` stands for `opts.target`.
+pub fn measure_bytes(
+    bytes: &[u8],
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+) -> Result<Measurement, MeasureError> {
+    let (dec, o, pitch_warnings) = decode_bytes_with_pitch(bytes, name, opts)?;
+    let mut m = measure_decoded(&dec, name, target, &o)?;
     m.warnings.extend(pitch_warnings);
     Ok(m)
 }
@@ -470,8 +516,64 @@ pub fn measure_planes(
     opts: &MeasureOptions,
     clip_level: f32,
 ) -> Result<Measurement, Failure> {
+    let distortion = given_distortion(opts, roi, size.0, size.1)?;
+    measure_planes_lens(groups, size, roi, target, opts, clip_level, distortion)
+}
+
+/// The distortion the user gave, checked against the image size (exit 2 with the allowed range).
+fn given_distortion(
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+) -> Result<Option<DistortionFound>, Failure> {
+    let Some(model) = opts.distortion.filter(|d| !d.is_zero()) else {
+        return Ok(None);
+    };
+    Lens::new(model, width, height)
+        .check()
+        .map_err(Failure::Options)?;
+    Ok(Some(lens_fit::given(model, roi, width, height)))
+}
+
+/// The distortion of a shot: as given, or estimated from the strip's edges in
+/// `luma` (a plane reaching at least [`DISTORTION_PAD_PX`] beyond the region),
+/// or none (with a target, or when estimating is off).
+fn resolve_distortion(
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    size: (usize, usize),
+    luma: impl FnOnce() -> Plane,
+) -> Result<Option<DistortionFound>, Failure> {
+    if opts.distortion.is_some() {
+        return given_distortion(opts, roi, size.0, size.1);
+    }
+    if !opts.estimate_distortion || target.is_some() {
+        return Ok(None);
+    }
+    Ok(lens_fit::estimate(&luma(), roi, size.0, size.1))
+}
+
+/// How far beyond the region the plane for the distortion estimate reaches, px.
+const DISTORTION_PAD_PX: f64 = 20.0;
+
+/// [`measure_planes`] with the distortion already resolved.
+fn measure_planes_lens(
+    groups: &[(&str, Vec<Plane>)],
+    size: (usize, usize),
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    clip_level: f32,
+    distortion: Option<DistortionFound>,
+) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
-    let specs = strips(roi, target)?;
+    let lens = distortion.and_then(|d| d.lens(size.0, size.1));
+    if let Some(d) = &distortion {
+        warnings.push(d.note());
+    }
+    let specs = strips(roi, target, lens.as_ref())?;
     let mut curves = Vec::new();
     let mut patch_rows = Vec::new();
     let bin_opts = BinOptions {
@@ -541,6 +643,7 @@ pub fn measure_planes(
         curves,
         patches: patch_rows,
         warnings,
+        distortion,
         preview: Preview::default(),
     })
 }

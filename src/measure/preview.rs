@@ -10,7 +10,8 @@ use crate::photo::linearise::Crop;
 
 /// A decoded photo's preview of the region `roi` (image px), from its 8-bit samples.
 pub(super) fn make_preview(dec: &Decoded, roi: &[Point; 4]) -> Preview {
-    preview_from(roi, dec.width, dec.height, |x, y| {
+    // A cut decode holds rows down to just below the region: the picture stops there.
+    preview_from(roi, dec.width, dec.rows, |x, y| {
         let mut px = [0u8; 3];
         for (c, out) in px.iter_mut().enumerate() {
             let cc = if dec.channels == 1 { 0 } else { c };
@@ -18,6 +19,7 @@ pub(super) fn make_preview(dec: &Decoded, roi: &[Point; 4]) -> Preview {
             *out = match &dec.samples {
                 Samples::U8(v) => v[k],
                 Samples::U16(v) => (v[k] >> 8) as u8,
+                Samples::F32(v) => (v[k].clamp(0.0, 1.0) * 255.0).round() as u8,
             };
         }
         px

@@ -7,6 +7,7 @@
 
 use super::profile::{self, Strip};
 use super::{Failure, LawKind, MeasureOptions, PhaseLaw, REFINE_SEARCH_PX};
+use crate::distortion::Lens;
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
 use crate::photo::decode::Decoded;
@@ -80,9 +81,28 @@ pub(super) fn refine_or_keep(
                 .zip(&refined)
                 .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
                 .fold(0.0, f64::max);
-            warnings.push(format!(
-                "region corners refined to the edges (moved up to {moved:.2} px)"
-            ));
+            if target.is_some() {
+                warnings.push(format!(
+                    "region corners refined to the edges (moved up to {moved:.2} px)"
+                ));
+            } else {
+                // Split each corner's move into across the strip (long edges fitted
+                // to the edges seen) and along it (ends turned along the bars).
+                let (dx, dy) = (given[1][0] - given[0][0], given[1][1] - given[0][1]);
+                let len = dx.hypot(dy).max(1e-12);
+                let (ux, uy) = (dx / len, dy / len);
+                let (mut along, mut across) = (0.0f64, 0.0f64);
+                for (a, b) in given.iter().zip(&refined) {
+                    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                    along = along.max((ex * ux + ey * uy).abs());
+                    across = across.max((ey * ux - ex * uy).abs());
+                }
+                warnings.push(format!(
+                    "region corners refined to the edges: long edges moved up to {across:.2} px \
+                     across the strip onto the edges seen; ends kept, turned along the printed \
+                     bars (corners slid up to {along:.2} px along the strip)"
+                ));
+            }
             refined
         }
         Err(e) => {
@@ -149,30 +169,45 @@ pub(super) fn bbox_crop(q: &[Point; 4], w: usize, h: usize, pad: f64) -> Crop {
 /// The strips to measure: (id, strip, law from the target, chart modulation from the target).
 pub(super) type StripSpec = (String, Strip, Option<PhaseLaw>, Option<f64>);
 
-/// The strips of the region `roi` (image px): the quadrilateral itself (strip
-/// units px), or each sweep of the target (strip units mm).
-pub(super) fn strips(roi: &[Point; 4], target: Option<&Target>) -> Result<Vec<StripSpec>, Failure> {
-    match target {
+/// The strips of region `roi` (photo corners); with `lens`, the corners are
+/// undistorted first and each strip carries the lens, so that strip points map
+/// to the photo through the homography and then the distortion.
+pub(super) fn strips(
+    roi: &[Point; 4],
+    target: Option<&Target>,
+    lens: Option<&Lens>,
+) -> Result<Vec<StripSpec>, Failure> {
+    let photo_roi = roi;
+    let undistorted;
+    let roi = match lens {
+        Some(l) => {
+            undistorted = roi.map(|p| l.undistort(p));
+            &undistorted
+        }
+        None => photo_roi,
+    };
+    let mut out: Vec<StripSpec> = match target {
         None => {
             let d = |a: Point, b: Point| (a[0] - b[0]).hypot(a[1] - b[1]);
             let len = 0.5 * (d(roi[0], roi[1]) + d(roi[3], roi[2]));
             let wid = 0.5 * (d(roi[0], roi[3]) + d(roi[1], roi[2]));
             let h = Homography::from_quads(&rect_corners(0.0, 0.0, len, wid), roi)
                 .map_err(|e| Failure::Region(e.to_string()))?;
-            Ok(vec![(
+            vec![(
                 "strip".into(),
                 Strip {
                     to_image: h,
+                    lens: None,
                     length: len,
                     width: wid,
                 },
                 None,
                 None,
-            )])
+            )]
         }
         Some(t) => {
             let h = target_homography(t, roi)?;
-            Ok(t.sweeps
+            t.sweeps
                 .iter()
                 .map(|sw| {
                     (
@@ -182,9 +217,13 @@ pub(super) fn strips(roi: &[Point; 4], target: Option<&Target>) -> Result<Vec<St
                         Some(sw.contrast),
                     )
                 })
-                .collect())
+                .collect()
         }
+    };
+    for sp in out.iter_mut() {
+        sp.1.lens = lens.copied();
     }
+    Ok(out)
 }
 
 /// The image quadrilaterals binning reads: each strip and sine patch inside
@@ -193,10 +232,17 @@ fn binned_quads(
     roi: &[Point; 4],
     target: Option<&Target>,
     margin: f64,
-) -> Result<Vec<[Point; 4]>, Failure> {
+    lens: Option<&Lens>,
+) -> Result<(Vec<[Point; 4]>, f64), Failure> {
     let m = margin.clamp(0.0, 0.45);
     let inner = |st: &Strip| st.image_quad(m * st.width, (1.0 - m) * st.width);
-    let mut quads: Vec<[Point; 4]> = strips(roi, target)?.iter().map(|sp| inner(&sp.1)).collect();
+    let specs = strips(roi, target, lens)?;
+    // How far the distorted regions bow out of their corner quads.
+    let bow = specs
+        .iter()
+        .map(|sp| sp.1.bow_px(m * sp.1.width, (1.0 - m) * sp.1.width))
+        .fold(0.0, f64::max);
+    let mut quads: Vec<[Point; 4]> = specs.iter().map(|sp| inner(&sp.1)).collect();
     if let Some(t) = target
         && !t.patches.is_empty()
     {
@@ -207,7 +253,7 @@ fn binned_quads(
                 .map(|p| inner(&rect_strip(&h, &p.rect, p.direction))),
         );
     }
-    Ok(quads)
+    Ok((quads, bow))
 }
 
 /// What a measurement reads: the crop around the binned regions, and for each
@@ -218,13 +264,15 @@ pub(super) fn read_set(
     roi: &[Point; 4],
     target: Option<&Target>,
     margin: f64,
+    lens: Option<&Lens>,
     width: usize,
     height: usize,
 ) -> Result<(Crop, impl Fn(usize) -> (usize, usize) + Sync), Failure> {
-    let quads = binned_quads(roi, target, margin)?;
+    let (quads, bow) = binned_quads(roi, target, margin, lens)?;
+    let bow = if bow > 0.0 { bow.ceil() + 1.0 } else { 0.0 };
     let crop = quads
         .iter()
-        .map(|q| bbox_crop(q, width, height, 3.0))
+        .map(|q| bbox_crop(q, width, height, 3.0 + bow))
         .reduce(|a, b| Crop {
             x0: a.x0.min(b.x0),
             y0: a.y0.min(b.y0),
@@ -237,7 +285,7 @@ pub(super) fn read_set(
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
         for q in &quads {
-            for dy in [-2.0, 0.0, 2.0] {
+            for dy in [-2.0 - bow, 0.0, 2.0 + bow] {
                 if let Some((a, b)) = profile::row_span(q, yc + dy) {
                     lo = lo.min(a);
                     hi = hi.max(b);
@@ -247,7 +295,10 @@ pub(super) fn read_set(
         if lo > hi {
             (0, 0)
         } else {
-            ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
+            (
+                (lo - 2.0 - bow).max(0.0) as usize,
+                (hi + 3.0 + bow).max(0.0) as usize,
+            )
         }
     };
     Ok((crop, span))
@@ -279,6 +330,7 @@ pub fn rect_strip(h: &Homography, rect: &crate::target::Rect, dir: Direction) ->
     };
     Strip {
         to_image: h.compose(&s),
+        lens: None,
         length: len,
         width: wid,
     }

@@ -107,11 +107,27 @@ pub(super) fn measure_strip(
             best = Some(r);
         }
     }
-    let Some((law, _, n_resolved)) = best else {
+    let Some((law, law_rms, n_resolved)) = best else {
         return Err(Failure::NoOscillation(format!(
             "{channel}/{id}: the oscillation is too weak or irregular to follow"
         )));
     };
+    // Quality gate: a strip too thin to average across, or a phase law that the
+    // local fits do not follow, gives a curve that only looks confident.
+    if wid_px < super::MIN_ACROSS_PX {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the strip is {wid_px:.1} px across inside its margins; \
+             at least {} px are needed to average the sweep across it",
+            super::MIN_ACROSS_PX
+        )));
+    }
+    if law_rms > super::MAX_LAW_RMS_CYCLES {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the sweep's phase law fits poorly (RMS {law_rms:.3} cycles, \
+             at most {})",
+            super::MAX_LAW_RMS_CYCLES
+        )));
+    }
     let total_cycles = law.phase(prof.length) - law.phase(0.0);
     if total_cycles < 5.0 || n_resolved < 5 {
         return Err(Failure::TooSmall(format!(
@@ -169,14 +185,43 @@ pub(super) fn measure_strip(
             "{channel}/{id}: fewer than 5 usable modulation points"
         )));
     }
-    let (m_chart, source) = normalise::chart_modulation(&points, contrast, channel, id)?;
-    normalise::normalise(&mut points, m_chart);
-    let figures = curve::figures(&points);
+    // Leave out the periods whose estimator window runs past the strip's low end.
+    let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
+    let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles + 2.0, s0, s1);
+    let (m_chart, m_chart_err, source) =
+        normalise::chart_modulation(&points, s_min, contrast, channel, id)?;
+    if m_chart_err > super::MAX_CHART_REL_ERR * m_chart {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the modulation is lost in noise (chart modulation {m_chart:.3} ± {m_chart_err:.3})"
+        )));
+    }
+    normalise::normalise(&mut points, m_chart, m_chart_err);
+    let mut figures = curve::figures(&points);
+    // A summary figure where the curve is noisier than ±0.05 is not given.
+    let noisy_at = |f: Option<f64>| -> bool {
+        f.is_some_and(|f| {
+            let near: Vec<f64> = points
+                .iter()
+                .filter(|p| !p.aliased && (p.freq_cy_px - f).abs() <= 0.01)
+                .map(|p| p.mtf_err)
+                .collect();
+            !near.is_empty() && near.iter().sum::<f64>() / near.len() as f64 > 0.05
+        })
+    };
+    for fig in [
+        &mut figures.mtf50_cy_px,
+        &mut figures.mtf30_cy_px,
+        &mut figures.mtf10_cy_px,
+    ] {
+        if noisy_at(*fig) {
+            *fig = None;
+        }
+    }
     let aliasing_from = points.iter().find(|p| p.aliased).map(|p| p.freq_cy_px);
     let across = |s: f64| -> [Point; 2] {
         [
-            strip.to_image.apply([s, opts.margin * strip.width]),
-            strip.to_image.apply([s, (1.0 - opts.margin) * strip.width]),
+            strip.to_photo([s, opts.margin * strip.width]),
+            strip.to_photo([s, (1.0 - opts.margin) * strip.width]),
         ]
     };
     let alias_line = points.iter().find(|p| p.aliased).map(|p| across(p.s));
@@ -191,6 +236,7 @@ pub(super) fn measure_strip(
         strip_unit: if target_law.is_some() { "mm" } else { "px" },
         points,
         chart_modulation: m_chart,
+        chart_modulation_err: m_chart_err,
         chart_modulation_source: source,
         figures,
         aliasing_from_cy_px: aliasing_from,
