@@ -158,10 +158,10 @@ impl Server {
             Some(h) => return Err(format!("refused: Host '{h}' is not {host}")),
             None => return Err("refused: no Host header".into()),
         }
-        if let Some(o) = header("Origin") {
-            if o != format!("http://{host}") {
-                return Err(format!("refused: Origin '{o}' is not http://{host}"));
-            }
+        if let Some(o) = header("Origin")
+            && o != format!("http://{host}")
+        {
+            return Err(format!("refused: Origin '{o}' is not http://{host}"));
         }
         let given = header(TOKEN_HEADER).or_else(|| {
             query

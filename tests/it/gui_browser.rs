@@ -39,12 +39,14 @@ impl Driver {
             .local_addr()
             .unwrap()
             .port();
-        let child = Command::new(chromedriver)
-            .arg(format!("--port={port}"))
+        let mut cmd = Command::new(chromedriver);
+        cmd.arg(format!("--port={port}"))
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start chromedriver");
+            .stderr(Stdio::null());
+        // Its own process group, so that the browser it starts is killed with it.
+        #[cfg(unix)]
+        std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
+        let child = cmd.spawn().expect("start chromedriver");
         let mut d = Driver {
             child,
             port,
@@ -157,6 +159,12 @@ impl Drop for Driver {
                 b"",
             );
         }
+        // The whole group: chromedriver and every browser process it started.
+        #[cfg(unix)]
+        let _ = Command::new("kill")
+            .args(["-KILL", "--", &format!("-{}", self.child.id())])
+            .stderr(Stdio::null())
+            .status();
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
