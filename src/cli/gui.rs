@@ -57,9 +57,15 @@ pub fn run(a: &Args) -> Result<(), CliError> {
         other => CliError::new(Code::Output, other.to_string()),
     })?;
     let url = gui.url();
-    println!("sweepmtf gui: {url}");
-    println!("sweepmtf gui: serving {} only; Ctrl-C stops", gui.origin());
-    let _ = std::io::stdout().flush();
+    // Not println!: a closed stdout (the reader gone) must not stop the server.
+    let mut out = std::io::stdout();
+    let _ = writeln!(out, "sweepmtf gui: {url}");
+    let _ = writeln!(
+        out,
+        "sweepmtf gui: serving {} only; Ctrl-C stops",
+        gui.origin()
+    );
+    let _ = out.flush();
     if !a.no_open && !open_browser(&url) {
         eprintln!("sweepmtf: could not start a browser; open the URL above");
     }

@@ -16,7 +16,7 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use sweepmtf::measure::{MeasureError, MeasureOptions, Measurement, measure_bytes, measure_raw};
 use sweepmtf::report::json::{Timings, summary};
 use sweepmtf::report::mtf_plot::PlotFormat;
@@ -282,23 +282,24 @@ fn request(v: Value) -> Result<MeasureReq, Reply> {
     serde_json::from_value(v).map_err(|e| Reply::error(400, 2, format!("bad request: {e}")))
 }
 
+/// A request read, resolved and measured: the request, its job, the
+/// measurement and the time it took (an error reply at the first failure).
+fn measured(s: &Server, v: Value) -> Result<(MeasureReq, Job, Measurement, Duration), Reply> {
+    let r = request(v)?;
+    let j = job(s, &r)?;
+    let t = Instant::now();
+    let m = run(&j).map_err(failed)?;
+    Ok((r, j, m, t.elapsed()))
+}
+
 /// `POST /api/measure`: measures at full resolution and returns the curves,
 /// the region, the figures, the warnings and the equivalent command line.
 pub fn measure(s: &Server, v: Value) -> Reply {
-    let r = match request(v) {
-        Ok(r) => r,
+    let (r, j, m, took) = match measured(s, v) {
+        Ok(x) => x,
         Err(e) => return e,
     };
-    let j = match job(s, &r) {
-        Ok(j) => j,
-        Err(e) => return e,
-    };
-    let t = Instant::now();
-    let m = match run(&j) {
-        Ok(m) => m,
-        Err(e) => return failed(e),
-    };
-    let ms = t.elapsed().as_secs_f64() * 1e3;
+    let ms = took.as_secs_f64() * 1e3;
     let out = out_dir(s, &r);
     Reply::json(&json!({
         "photo": r.photo,
@@ -320,20 +321,11 @@ pub fn measure(s: &Server, v: Value) -> Reply {
 /// `measure` writes (`STEM.mtf.csv`, `STEM.mtf.png`, `STEM.roi.png`,
 /// `STEM.summary.json`) into the output folder, atomically; nowhere else.
 pub fn save(s: &Server, v: Value) -> Reply {
-    let r = match request(v) {
-        Ok(r) => r,
-        Err(e) => return e,
-    };
-    let j = match job(s, &r) {
-        Ok(j) => j,
-        Err(e) => return e,
-    };
     let t = Instant::now();
-    let m = match run(&j) {
-        Ok(m) => m,
-        Err(e) => return failed(e),
+    let (r, j, m, t_measured) = match measured(s, v) {
+        Ok(x) => x,
+        Err(e) => return e,
     };
-    let t_measured = t.elapsed();
     let out = out_dir(s, &r);
     let none = ModelArgs {
         model: None,

@@ -54,28 +54,20 @@ pub struct ShippedTarget {
     pub toml: &'static str,
 }
 
+/// One shipped target: its path (from the source tree's root) and its text.
+macro_rules! shipped {
+    ($($path:literal),* $(,)?) => {
+        [$(ShippedTarget { path: $path, toml: include_str!(concat!("../../", $path)) }),*]
+    };
+}
+
 /// The shipped target descriptions.
-pub const SHIPPED: [ShippedTarget; 5] = [
-    ShippedTarget {
-        path: "targets/a4_log.toml",
-        toml: include_str!("../../targets/a4_log.toml"),
-    },
-    ShippedTarget {
-        path: "targets/a4_linear.toml",
-        toml: include_str!("../../targets/a4_linear.toml"),
-    },
-    ShippedTarget {
-        path: "targets/a3_log.toml",
-        toml: include_str!("../../targets/a3_log.toml"),
-    },
-    ShippedTarget {
-        path: "targets/a3_linear.toml",
-        toml: include_str!("../../targets/a3_linear.toml"),
-    },
-    ShippedTarget {
-        path: "targets/a4_patches.toml",
-        toml: include_str!("../../targets/a4_patches.toml"),
-    },
+pub const SHIPPED: [ShippedTarget; 5] = shipped![
+    "targets/a4_log.toml",
+    "targets/a4_linear.toml",
+    "targets/a3_log.toml",
+    "targets/a3_linear.toml",
+    "targets/a4_patches.toml",
 ];
 
 /// The page's state.

@@ -167,7 +167,11 @@ fn measure_and_save_equal_the_cli_with_the_same_corners() {
     let summary = read(ref_dir.path());
     assert_eq!(m["summary"]["curves"], summary["curves"]);
     // The corner moved: MTF50 is not the automatic one's (the region changed).
-    let f50 = |v: &Value| v["summary"]["curves"][0]["mtf50"]["cy_px"].as_f64().unwrap();
+    let f50 = |v: &Value| {
+        v["summary"]["curves"][0]["mtf50"]["cy_px"]
+            .as_f64()
+            .unwrap()
+    };
     assert_ne!(f50(&m), f50(&auto));
 }
 

@@ -12,7 +12,8 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn find(names: &[&str]) -> Option<PathBuf> {
+/// The first of `names` found on PATH.
+pub fn find(names: &[&str]) -> Option<PathBuf> {
     let path = std::env::var_os("PATH")?;
     for dir in std::env::split_paths(&path) {
         for n in names {
@@ -26,14 +27,15 @@ fn find(names: &[&str]) -> Option<PathBuf> {
 }
 
 /// A chromedriver child and one session in it.
-struct Driver {
+pub struct Driver {
     child: Child,
     port: u16,
     session: String,
 }
 
 impl Driver {
-    fn start(chromedriver: &PathBuf, chromium: &PathBuf, profile: &std::path::Path) -> Driver {
+    /// Starts chromedriver and a headless chromium session (profile in `profile`).
+    pub fn start(chromedriver: &PathBuf, chromium: &PathBuf, profile: &std::path::Path) -> Driver {
         let port = std::net::TcpListener::bind("127.0.0.1:0")
             .unwrap()
             .local_addr()
@@ -67,7 +69,7 @@ impl Driver {
                 "args": [
                     "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                     "--disable-component-update", "--no-first-run", "--disable-dev-shm-usage",
-                    "--window-size=1500,1000",
+                    "--window-size=1500,1250",
                     format!("--user-data-dir={}", profile.display()),
                 ],
             },
@@ -95,7 +97,8 @@ impl Driver {
         v["value"].clone()
     }
 
-    fn s(&self, method: &str, path: &str, body: Value) -> Value {
+    /// A command on the session.
+    pub fn s(&self, method: &str, path: &str, body: Value) -> Value {
         self.cmd(method, &format!("/session/{}{path}", self.session), &body)
     }
 
@@ -108,7 +111,7 @@ impl Driver {
     }
 
     /// Waits until `script` returns a truthy value (up to `secs`), returns it.
-    fn wait(&self, script: &str, secs: u64) -> Value {
+    pub fn wait(&self, script: &str, secs: u64) -> Value {
         let t = Instant::now();
         loop {
             let v = self.js(script);
@@ -136,13 +139,29 @@ impl Driver {
             .to_string()
     }
 
+    /// A screenshot of the window, cut below the shown view's panes, as
+    /// target/gui-screenshots/NAME.
     fn screenshot(&self, name: &str) -> PathBuf {
         let v = self.s("GET", "/screenshot", json!({}));
         let bytes = base64_decode(v.as_str().unwrap());
+        let bottom = self
+            .js("return Math.ceil(devicePixelRatio * (8 + Math.max(...[...document.querySelectorAll('.view:not(.hidden) .pane')].map(e => e.getBoundingClientRect().bottom))));")
+            .as_f64()
+            .unwrap_or(f64::INFINITY);
+        let mut img = image::load_from_memory(&bytes).unwrap();
+        if bottom < img.height() as f64 {
+            img = img.crop_imm(0, 0, img.width(), bottom as u32);
+        }
         let dir = root().join("target/gui-screenshots");
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join(name);
-        std::fs::write(&p, bytes).unwrap();
+        // Best compression, so that the pictures the README shows stay small.
+        let png = image::codecs::png::PngEncoder::new_with_quality(
+            std::fs::File::create(&p).unwrap(),
+            image::codecs::png::CompressionType::Best,
+            image::codecs::png::FilterType::Adaptive,
+        );
+        img.to_rgb8().write_with_encoder(png).unwrap();
         p
     }
 }
@@ -236,15 +255,15 @@ fn browser_measures_drags_saves_and_models() {
     let before = mtf50(&d);
     d.screenshot("measure_located.png");
 
-    // Drag corner 3 by (−40, +25) CSS pixels with the mouse.
+    // Drag corner 3 by (−5, +3) CSS pixels (about −12, +8 image pixels) with the mouse.
     let corner = d.element("#corner-2");
     let actions = json!({"actions": [{
         "type": "pointer", "id": "mouse", "parameters": {"pointerType": "mouse"},
         "actions": [
             {"type": "pointerMove", "origin": {"element-6066-11e4-a52e-4f735466cecf": corner}, "x": 0, "y": 0, "duration": 0},
             {"type": "pointerDown", "button": 0},
-            {"type": "pointerMove", "origin": "pointer", "x": -20, "y": 12, "duration": 100},
-            {"type": "pointerMove", "origin": "pointer", "x": -20, "y": 13, "duration": 100},
+            {"type": "pointerMove", "origin": "pointer", "x": -3, "y": 1, "duration": 100},
+            {"type": "pointerMove", "origin": "pointer", "x": -2, "y": 2, "duration": 100},
             {"type": "pointerUp", "button": 0},
         ],
     }]});

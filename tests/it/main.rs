@@ -19,6 +19,7 @@ mod chart_sinemtf;
 mod exif_jpeg;
 mod gui_api;
 mod gui_browser;
+mod gui_timing;
 mod jpeg_region;
 mod locate_each_chart;
 mod locate_find;

@@ -278,14 +278,15 @@ function drawMtf() {
       if (v === null || v === undefined) continue;
       el("path", { d: `M${f.x(0)},${f.y(lv)}L${f.x(v)},${f.y(lv)}L${f.x(v)},${f.y(0)}`, stroke: col, fill: "none", class: "mark" }, g);
     }
-    if (r.curves.length > 1) el("text", { x: 540, y: 40 + 14 * k, class: "legend", fill: col }, svg, `${c.channel}/${c.sweep_id}`);
+    if (r.curves.length > 1) el("text", { x: 606, y: 40 + 14 * k, "text-anchor": "end", class: "legend", fill: col }, svg, `${c.channel}/${c.sweep_id}`);
   });
-  if (r.curves.some((c) => c.points.some((p) => p.aliased))) el("text", { x: 66, y: 318, class: "legend", fill: "#d00" }, svg, "○ aliased (not an MTF)");
+  let row = r.curves.length > 1 ? r.curves.length : 0;
   if (M.modelCut && pitch) {
     const mc = M.modelCut;
     el("path", { d: polyline(mc.freq_cy_mm.map((fm, i) => [f.x(fm * pitch), f.y(mc.mtf[i])])), fill: "none", stroke: "#555", "stroke-dasharray": "7 4", "stroke-width": 1.5, class: "model-line" }, g);
-    el("text", { x: 540, y: 40 + 14 * r.curves.length, class: "legend", fill: "#555" }, svg, "-- model");
+    el("text", { x: 606, y: 40 + 14 * row++, "text-anchor": "end", class: "legend", fill: "#555" }, svg, "-- model");
   }
+  if (r.curves.some((c) => c.points.some((p) => p.aliased))) el("text", { x: 606, y: 40 + 14 * row, "text-anchor": "end", class: "legend", fill: "#d00" }, svg, "○ aliased (not an MTF)");
 }
 
 function drawFigures() {
@@ -295,20 +296,21 @@ function drawFigures() {
   if (!r) return;
   const row = (cells, head) => { const tr = document.createElement("tr"); cells.forEach((c, i) => { const td = document.createElement(i === 0 || head ? "th" : "td"); td.textContent = c; tr.appendChild(td); }); t.appendChild(tr); return tr; };
   const pitch = r.pixel_pitch_mm;
-  row(["", "cy/px", pitch ? "lp/mm" : "", "LW/PH"], true);
+  // One row per curve: MTF50 (cy/px, lp/mm, LW/PH), MTF10, MTF at Nyquist, chart modulation.
+  row(["", "MTF50 cy/px"].concat(pitch ? ["lp/mm"] : [], ["LW/PH", "MTF10 cy/px", "at Nyquist", "chart mod."]), true);
+  const reached = (v, d) => (v ? fmt(v.cy_px, d) : "not reached");
   r.summary.curves.forEach((s, k) => {
     const c = r.curves[k];
-    const tag = r.curves.length > 1 ? ` ${c.channel}/${c.sweep_id}` : "";
-    for (const [name, key] of [["MTF50", "mtf50"], ["MTF10", "mtf10"]]) {
-      const v = s[key];
-      const tr = row([name + tag, v ? fmt(v.cy_px, 4) : "not reached", v && v.cy_mm !== undefined ? fmt(v.cy_mm, 1) : "", v ? fmt(v.lw_ph, 0) : ""]);
-      tr.id = `${key}-${k}`;
-      if (v) tr.dataset.cyPx = String(v.cy_px);
-    }
-    row(["MTF at Nyquist" + tag, fmt(c.figures.mtf_nyquist, 3), "", ""]);
-    row(["chart modulation" + tag, fmt(c.chart_modulation, 3), "", ""]).title = c.chart_modulation_source;
+    const name = r.curves.length > 1 ? `${c.channel}/${c.sweep_id}` : c.channel;
+    const v = s.mtf50;
+    const cells = [name, reached(v, 4)].concat(pitch ? [v && v.cy_mm !== undefined ? fmt(v.cy_mm, 1) : ""] : [],
+      [v ? fmt(v.lw_ph, 0) : "", reached(s.mtf10, 4), fmt(c.figures.mtf_nyquist, 3), fmt(c.chart_modulation, 3)]);
+    const tr = row(cells);
+    tr.id = `mtf50-${k}`;
+    if (v) tr.dataset.cyPx = String(v.cy_px);
+    tr.lastChild.title = c.chart_modulation_source;
   });
-  if (pitch) row(["pixel pitch", `${fmt(pitch * 1000, 3)} µm`, "", ""]);
+  if (pitch) { const tr = row(["pixel pitch", `${fmt(pitch * 1000, 3)} µm`]); tr.lastChild.colSpan = 6; tr.lastChild.style.textAlign = "left"; }
 }
 
 async function save() {
@@ -510,19 +512,19 @@ function drawCut(j) {
   c.factors.forEach((fa, k) => {
     const col = COLOURS[(k + 1) % COLOURS.length];
     el("path", { d: line(fa.mtf), fill: "none", stroke: col, "stroke-width": 1.2, "stroke-dasharray": "6 3" }, svg);
-    el("text", { x: 470, y: 32 + 14 * k, class: "legend", fill: col }, svg, fa.name);
+    el("text", { x: 606, y: 32 + 14 * k, "text-anchor": "end", class: "legend", fill: col }, svg, fa.name);
   });
   el("path", { d: line(c.mtf), fill: "none", stroke: "#000", "stroke-width": 2.2, id: "cut-total" }, svg);
-  el("text", { x: 470, y: 32 + 14 * c.factors.length, class: "legend", fill: "#000" }, svg, "total");
-  if (c.nyquist_cy_mm !== null && c.nyquist_cy_mm <= fm) {
-    el("line", { x1: f.x(c.nyquist_cy_mm), x2: f.x(c.nyquist_cy_mm), y1: 14, y2: 304, class: "nyquist" }, svg);
-    el("text", { x: f.x(c.nyquist_cy_mm) + 4, y: 300, class: "tick", fill: "#c33" }, svg, `Nyquist ${c.nyquist_cy_mm.toFixed(1)}`);
-  }
   // MTF50 of the total, read off the drawn samples (for the eye and the tests).
   let f50 = null;
   for (let i = 1; i < c.mtf.length; i++) if (c.mtf[i - 1] >= 0.5 && c.mtf[i] < 0.5) { const a = c.mtf[i - 1], b = c.mtf[i]; f50 = c.freq_cy_mm[i - 1] + (a - 0.5) / (a - b) * (c.freq_cy_mm[i] - c.freq_cy_mm[i - 1]); break; }
   svg.dataset.mtf50 = f50 === null ? "" : String(f50);
-  el("text", { x: 66, y: 30, class: "legend" }, svg, f50 === null ? "MTF50 beyond the cut" : `MTF50 ${f50.toFixed(1)} lp/mm`);
+  el("text", { x: 606, y: 32 + 14 * c.factors.length, "text-anchor": "end", class: "legend", fill: "#000", "font-weight": "bold" }, svg,
+    "total, MTF50 " + (f50 === null ? "beyond the cut" : `${f50.toFixed(1)} lp/mm`));
+  if (c.nyquist_cy_mm !== null && c.nyquist_cy_mm <= fm) {
+    el("line", { x1: f.x(c.nyquist_cy_mm), x2: f.x(c.nyquist_cy_mm), y1: 14, y2: 304, class: "nyquist" }, svg);
+    el("text", { x: f.x(c.nyquist_cy_mm) + 4, y: 28, class: "tick", fill: "#c33" }, svg, `Nyquist ${c.nyquist_cy_mm.toFixed(1)}`);
+  }
 }
 
 function drawMap(j) {

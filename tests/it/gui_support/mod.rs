@@ -13,14 +13,20 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The built `sweepmtf` binary.
+/// The built `sweepmtf` binary (`SWEEPMTF_BIN` names another one, e.g. a
+/// release build for the timings).
 pub fn bin() -> PathBuf {
-    assert_cmd::cargo::cargo_bin("sweepmtf")
+    match std::env::var_os("SWEEPMTF_BIN") {
+        Some(p) => root().join(p),
+        None => assert_cmd::cargo::cargo_bin("sweepmtf"),
+    }
 }
 
 /// A running `sweepmtf gui`, stopped when dropped.
 pub struct GuiProc {
     child: Child,
+    /// Its stdout, kept open while it runs.
+    _stdout: BufReader<std::process::ChildStdout>,
     /// The printed URL (with the token).
     pub url: String,
     /// The port.
@@ -42,8 +48,8 @@ impl GuiProc {
             .spawn()
             .expect("start sweepmtf gui");
         let mut line = String::new();
-        let out = child.stdout.take().unwrap();
-        BufReader::new(out).read_line(&mut line).unwrap();
+        let mut out = BufReader::new(child.stdout.take().unwrap());
+        out.read_line(&mut line).unwrap();
         let url = line
             .trim()
             .strip_prefix("sweepmtf gui: ")
@@ -56,6 +62,7 @@ impl GuiProc {
             token: query.to_string(),
             url,
             child,
+            _stdout: out,
         }
     }
 
