@@ -9,6 +9,7 @@
 
 pub mod batch;
 pub mod chart;
+pub mod fuzz;
 pub mod geometry;
 pub mod locate;
 pub mod measure;

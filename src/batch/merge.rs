@@ -98,6 +98,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, BatchError>
 
     let out_shots = out.join(SHOTS_DIR);
     std::fs::create_dir_all(&out_shots).map_err(|e| BatchError::output(&out_shots, e))?;
+    let _lock = super::lock::FolderLock::acquire(out)?;
     atomic::remove_stale_temps(&out_shots, true).map_err(|e| BatchError::output(&out_shots, e))?;
     let out_canon = std::fs::canonicalize(&out_shots).ok();
     let mut records = Vec::new();

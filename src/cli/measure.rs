@@ -206,7 +206,10 @@ fn write_outputs(
     files.push((out("summary.json"), summary_text.into_bytes()));
     write_all_atomic(&files).map_err(out_err)?;
     for w in &m.warnings {
-        eprintln!("sweepmtf: warning: {name}: {w}");
+        super::messages::warning(&format!("{name}: {w}"));
+    }
+    for n in &m.notes {
+        super::messages::note(&format!("{name}: {n}"));
     }
     if a.json {
         println!("{summary_value}");

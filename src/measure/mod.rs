@@ -236,8 +236,10 @@ pub struct Measurement {
     pub curves: Vec<Curve>,
     /// Sine-patch results.
     pub patches: Vec<PatchResult>,
-    /// Warnings and notices (one line each).
+    /// Warnings: something may be wrong with the result (one line each).
     pub warnings: Vec<String>,
+    /// Notes: what was done or assumed (one line each; the CLI shows them with `-v`).
+    pub notes: Vec<String>,
     /// Picture of the measured area.
     pub preview: Preview,
 }
@@ -252,14 +254,26 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
         path: name.clone(),
         failure: f,
     })?;
+    let located = opts.roi.is_none() && target.is_some();
     if crate::photo::raw::is_raw_path(path) {
-        return measure_raw(path, &name, target.as_ref(), opts);
+        let mut m = measure_raw(path, &name, target.as_ref(), opts)?;
+        if located {
+            m.notes.insert(0, FOUND_NOTE.into());
+        }
+        return Ok(m);
     }
-    let (dec, o, pitch_warnings) = decode_with_pitch(path, &name, opts)?;
+    let (dec, o, pitch_warnings, pitch_notes) = decode_with_pitch(path, &name, opts)?;
     let mut m = measure_decoded(&dec, &name, target.as_ref(), &o)?;
     m.warnings.extend(pitch_warnings);
+    if located {
+        m.notes.insert(0, FOUND_NOTE.into());
+    }
+    m.notes.extend(pitch_notes);
     Ok(m)
 }
+
+/// The note of a region found from the target's fiducials.
+const FOUND_NOTE: &str = "region found automatically from the target's fiducials";
 
 /// Decodes a photo and measures every chart in it: with `--target` and
 /// neither a region nor a chart index, each chart found from the fiducials
@@ -292,12 +306,13 @@ pub fn measure_file_each(
             .enumerate()
             .map(|(i, c)| {
                 let w = found_warnings(c, i, n);
-                let m = measure_frame_at(&frame, &name, Some(&target), opts, &c.corners_px, w)?;
+                let mut m = measure_frame_at(&frame, &name, Some(&target), opts, &c.corners_px, w)?;
+                m.notes.splice(0..0, found_notes(i, n));
                 Ok(name_chart(m, i, n))
             })
             .collect();
     }
-    let (dec, o, pitch_warnings) = decode_with_pitch(path, &name, opts)?;
+    let (dec, o, pitch_warnings, pitch_notes) = decode_with_pitch(path, &name, opts)?;
     let charts = located(&full_grey(&dec)[0])?;
     let n = charts.len();
     charts
@@ -307,6 +322,8 @@ pub fn measure_file_each(
             let w = found_warnings(c, i, n);
             let mut m = measure_decoded_at(&dec, &name, Some(&target), &o, &c.corners_px, None, w)?;
             m.warnings.extend(pitch_warnings.iter().cloned());
+            m.notes.splice(0..0, found_notes(i, n));
+            m.notes.extend(pitch_notes.iter().cloned());
             Ok(name_chart(m, i, n))
         })
         .collect()
@@ -339,24 +356,30 @@ fn location_failed(e: crate::locate::LocateError) -> Failure {
     Failure::Region(format!("automatic location failed: {e}"))
 }
 
-/// The warnings of a chart found automatically: the search's own, and which
-/// of `n` charts (left to right) it is when there are several.
-fn found_warnings(c: &crate::locate::Located, i: usize, n: usize) -> Vec<String> {
-    let mut w = c.warnings.clone();
-    w.push("region found automatically from the target's fiducials".into());
+/// The warnings of a chart found automatically: the search's own.
+fn found_warnings(c: &crate::locate::Located, _i: usize, _n: usize) -> Vec<String> {
+    c.warnings.clone()
+}
+
+/// The notes of chart `i` of `n` found automatically: how it was found and,
+/// with several, which one (left to right) it is.
+fn found_notes(i: usize, n: usize) -> Vec<String> {
+    let mut notes = vec![FOUND_NOTE.to_string()];
     if n > 1 {
-        w.push(format!("chart index {i} of the {n} found (left to right)"));
+        notes.push(format!("chart index {i} of the {n} found (left to right)"));
     }
-    w
+    notes
 }
 
 /// Reads and decodes a photo (not a raw), and resolves its pixel pitch from
-/// EXIF and the options: the photo, the options with the pitch, the pitch's warnings.
+/// EXIF and the options: the photo, the options with the pitch, the
+/// warnings (the pitch's, damaged JPEG scan data) and the pitch's notes.
+#[allow(clippy::type_complexity)]
 fn decode_with_pitch(
     path: &Path,
     name: &str,
     opts: &MeasureOptions,
-) -> Result<(Decoded, MeasureOptions, Vec<String>), MeasureError> {
+) -> Result<(Decoded, MeasureOptions, Vec<String>, Vec<String>), MeasureError> {
     let name = name.to_string();
     let bytes = std::fs::read(path).map_err(|source| MeasureError {
         path: name.clone(),
@@ -371,13 +394,21 @@ fn decode_with_pitch(
         failure: e.into(),
     })?;
     let facts = crate::photo::exif::facts_from_bytes(&bytes);
+    let damage = crate::photo::jpeg_check::scan_damage(&bytes);
     drop(bytes);
-    let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
+    let mut pitch =
+        crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
+    if let Some(d) = damage {
+        pitch.warnings.insert(
+            0,
+            format!("damaged JPEG scan data ({d}): the picture may be partly grey"),
+        );
+    }
     let o = MeasureOptions {
         pixel_pitch_mm: pitch.pitch_mm,
         ..opts.clone()
     };
-    Ok((dec, o, pitch.warnings))
+    Ok((dec, o, pitch.warnings, pitch.notes))
 }
 
 /// Measures a camera raw file: linear CFA planes, no demosaicing, no tone curve.
@@ -500,6 +531,7 @@ fn measure_frame_at(
     warnings.extend(pitch.warnings);
     warnings.append(&mut m.warnings);
     m.warnings = warnings;
+    m.notes.extend(pitch.notes);
     Ok(m)
 }
 
@@ -672,6 +704,7 @@ fn measure_decoded_at(
         failure,
     };
     let roi = *roi;
+    let mut tone_note = None;
     // Crop: the region's bounding box (+2 px).
     let crop = bbox_crop(&roi, dec.width, dec.height, 2.0);
     let (tone, tone_desc) = if opts.tone_chart {
@@ -691,7 +724,7 @@ fn measure_decoded_at(
         (Tone::Gamma(g), format!("power law, gamma {g}"))
     } else {
         let (t, notice) = default_tone(dec.bits());
-        warnings.extend(notice);
+        tone_note = notice;
         let d = match t {
             Tone::Srgb => "sRGB curve (8-bit default)".to_string(),
             _ => "linear (16-bit default)".to_string(),
@@ -736,6 +769,7 @@ fn measure_decoded_at(
     m.preview = preview;
     warnings.append(&mut m.warnings);
     m.warnings = warnings;
+    m.notes.extend(tone_note);
     Ok(m)
 }
 
@@ -1084,6 +1118,7 @@ pub fn measure_planes(
         curves,
         patches: patch_rows,
         warnings,
+        notes: Vec::new(),
         preview: Preview::default(),
     })
 }

@@ -3,7 +3,6 @@
 //! illumination fall-off, photon and read noise, sRGB 8-bit JPEG q90), against
 //! the simulator's own target corners.
 
-
 use sweepmtf::locate;
 use sweepmtf::model::{System, gaussian};
 use sweepmtf::photo::Plane;
