@@ -163,7 +163,7 @@ fn parent(seed: u64, from: u64, to: u64, log: Option<PathBuf>) {
                             current = None;
                             next = i + 1;
                             let done = next - from;
-                            if done % 1000 == 0 {
+                            if done.is_multiple_of(1000) {
                                 eprintln!(
                                     "{done} cases, {:.0} s: {} ok, {} clean errors, {} panics, {} crashes, {} slow, {} big",
                                     t0.elapsed().as_secs_f64(),

@@ -9,6 +9,7 @@
 
 pub mod batch;
 pub mod chart;
+pub mod distortion;
 pub mod fuzz;
 pub mod geometry;
 pub mod locate;

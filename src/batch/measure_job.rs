@@ -39,9 +39,10 @@ pub fn kind_of(f: &Failure) -> FailKind {
             FailKind::Input
         }
         Failure::NoRoi | Failure::Region(_) | Failure::TooSmall(_) => FailKind::Locate,
-        Failure::Clipped { .. } | Failure::NoOscillation(_) | Failure::ModulationUnknown(_) => {
-            FailKind::Measure
-        }
+        Failure::Clipped { .. }
+        | Failure::NoOscillation(_)
+        | Failure::ModulationUnknown(_)
+        | Failure::Unreliable(_) => FailKind::Measure,
     }
 }
 

@@ -37,9 +37,10 @@ pub fn code_of(f: &Failure) -> Code {
         Failure::Decode(_) | Failure::Raw(_) | Failure::Target(_) => Code::Input,
         Failure::Options(_) => Code::Usage,
         Failure::NoRoi | Failure::Region(_) | Failure::TooSmall(_) => Code::Locate,
-        Failure::Clipped { .. } | Failure::NoOscillation(_) | Failure::ModulationUnknown(_) => {
-            Code::Measure
-        }
+        Failure::Clipped { .. }
+        | Failure::NoOscillation(_)
+        | Failure::ModulationUnknown(_)
+        | Failure::Unreliable(_) => Code::Measure,
     }
 }
 

@@ -61,6 +61,15 @@ pub struct MeasureFlags {
     /// Fraction of the strip width left out along each long edge (advanced).
     #[arg(long, default_value_t = 0.15, value_name = "FRACTION")]
     pub margin: f64,
+    /// The lens's radial distortion in Lensfun's PTLens form, ptlens:a=A,b=B,c=C (radius 1 =
+    /// half the image's smaller side, centre = image centre). Default: estimated from the
+    /// strip's straight long edges and used when clearly there.
+    #[arg(long, value_name = "ptlens:a=A,b=B,c=C", allow_hyphen_values = true, value_parser = parse_distortion)]
+    pub distortion: Option<sweepmtf::distortion::Ptlens>,
+    /// Estimate lens distortion from the strip's straight printed long edges
+    /// (opt-in: on strips without clear edges around them it can misfire).
+    #[arg(long, conflicts_with = "distortion")]
+    pub estimate_distortion: bool,
     /// Estimator window in cycles (advanced).
     #[arg(long, default_value_t = 4.0, value_name = "CYCLES")]
     pub window: f64,
@@ -97,6 +106,8 @@ impl MeasureFlags {
             chart_index: self.chart_index,
             refine_roi: !self.no_refine_roi,
             green_balance: !self.no_green_balance,
+            distortion: self.distortion,
+            estimate_distortion: self.estimate_distortion,
         })
     }
 }
@@ -112,6 +123,10 @@ pub fn parse_roi(text: &str) -> Result<[[f64; 2]; 4], String> {
             "'{text}': expected eight numbers x1,y1,x2,y2,x3,y3,x4,y4 (image pixels)"
         )),
     }
+}
+
+fn parse_distortion(s: &str) -> Result<sweepmtf::distortion::Ptlens, String> {
+    s.parse()
 }
 
 fn parse_method(s: &str) -> Result<Method, String> {

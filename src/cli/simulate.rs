@@ -103,6 +103,10 @@ pub struct Args {
     /// Seed of the temporal noise.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
+    /// Radial lens distortion in Lensfun's PTLens form, ptlens:a=A,b=B,c=C (radius 1 = half
+    /// the frame's smaller side; b > 0 pincushion, b < 0 barrel; at most ±20 % at the corner).
+    #[arg(long, value_name = "ptlens:a=A,b=B,c=C", allow_hyphen_values = true)]
+    pub distortion: Option<String>,
     /// Pixel aperture: auto (square unless the system has an aperture factor), square or none.
     #[arg(long, value_name = "KIND", default_value = "auto")]
     pub pixel_aperture: String,
@@ -211,6 +215,11 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
             )));
         }
     };
+    let distortion = a
+        .distortion
+        .as_deref()
+        .map(|d| d.parse::<sweepmtf::distortion::Ptlens>().map_err(usage))
+        .transpose()?;
     Ok(Camera {
         width_px: w as usize,
         height_px: h as usize,
@@ -234,6 +243,7 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
         jpeg_quality: a.jpeg,
         bayer,
         pixel_aperture,
+        distortion,
         render: RenderSettings {
             oversample: a.oversample,
             margin_px: a.margin,

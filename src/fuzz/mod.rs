@@ -201,7 +201,7 @@ impl Corpus {
                     return Ok(());
                 }
                 drop(d);
-                if i % 2 == 0 {
+                if i.is_multiple_of(2) {
                     measure(
                         &path,
                         MeasureOptions {
@@ -225,7 +225,7 @@ impl Corpus {
             }
             Kind::TargetToml | Kind::SineMtf => {
                 crate::target::Target::load(&path).map_err(|e| e.to_string())?;
-                if s.kind == Kind::TargetToml && i % 3 == 0 {
+                if s.kind == Kind::TargetToml && i.is_multiple_of(3) {
                     measure(
                         &shot,
                         MeasureOptions {

@@ -11,11 +11,11 @@ impl Rng {
     /// A generator for case `i` of run `seed`.
     pub fn new(seed: u64, i: u64) -> Rng {
         let mut r = Rng(seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        r.next();
+        r.next_u64();
         r
     }
     /// The next 64 random bits.
-    pub fn next(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -24,7 +24,7 @@ impl Rng {
     }
     /// A number in `0..n` (`n` > 0).
     pub fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
+        (self.next_u64() % n.max(1) as u64) as usize
     }
     /// One element of `items`.
     pub fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
@@ -238,7 +238,7 @@ pub fn mutate_binary(bytes: &mut Vec<u8>, layout: Layout, rng: &mut Rng) -> Stri
                 let v = *rng.pick(&[0u8, 0xFF, 0x7F, 0x80]);
                 let random = rng.below(2) == 0;
                 for b in &mut bytes[p..p + k] {
-                    *b = if random { rng.next() as u8 } else { v };
+                    *b = if random { rng.next_u64() as u8 } else { v };
                 }
                 what.push(format!("overwrite {k} bytes at {p}"));
             }
@@ -264,7 +264,7 @@ pub fn mutate_binary(bytes: &mut Vec<u8>, layout: Layout, rng: &mut Rng) -> Stri
                 }
                 let f = *rng.pick(&fs);
                 let v = if rng.below(3) == 0 {
-                    rng.next() as u32
+                    rng.next_u64() as u32
                 } else {
                     *rng.pick(&EDGE32)
                 };

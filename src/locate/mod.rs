@@ -238,8 +238,8 @@ fn not_found(target: &Target, candidates: Vec<Candidate>) -> LocateError {
 /// With `target`, the corners are the target frame's (0,0), (w,0), (w,h), (0,h) and
 /// every straight edge of its sweeps, patches and grey patches is used (each with
 /// the polarity the target gives it); without, the corners are those of one strip:
-/// its long edges are refined, its ends are moved inward by `search_px` and turned
-/// along the printed bars ([`strip_ends`]; an error when the bars are not clearly seen).
+/// its long edges are refined, its ends keep the given lines' centres and are only
+/// turned along the printed bars ([`strip_ends`]; an error when the bars are not clearly seen).
 /// Errors (edges not clearly seen, ambiguous, or corners that would move further
 /// than `search_px` allows) leave the caller to use the corners as given.
 pub fn refine_roi(

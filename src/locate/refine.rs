@@ -578,10 +578,6 @@ pub fn refine_roi(
     }
     let mut h =
         Homography::from_quads(&src, &corners).map_err(|e| LocateError::Refine(e.to_string()))?;
-    let centre = [
-        corners.iter().map(|c| c[0]).sum::<f64>() / 4.0,
-        corners.iter().map(|c| c[1]).sum::<f64>() / 4.0,
-    ];
     let search = search_px.max(2.0) + 2.0;
     let mut seen_edges = Vec::new();
     for s in [search, 3.0, 2.0] {
@@ -610,12 +606,13 @@ pub fn refine_roi(
         } else {
             edges = keep_straight_trimmed(edges, 6);
             seen_edges = edges.clone();
-            // A long side whose edge is not clearly seen keeps the user's line. The ends
+            // A side whose edge is not clearly seen keeps the user's line. The ends
             // are not searched (a sweep's low-frequency end starts at a bright peak, its
             // high-frequency end fades to grey, and the target's border may lie just
-            // beyond): they keep the user's lines moved inward by the search range, so
-            // that no surround is measured as sweep, and are turned along the printed
-            // bars at the end (`strip_ends`).
+            // beyond): they keep the user's lines, so exact corners stay exact along
+            // the strip, and are only turned along the printed bars at the end
+            // (`strip_ends`). The estimator leaves out the periods next to each end,
+            // so a little surround inside a loosely given end costs nothing.
             let mut seen = 0;
             for i in 0..4 {
                 let (sa, sb) = (src[i], src[(i + 1) % 4]);
@@ -624,27 +621,12 @@ pub fn refine_roi(
                     continue;
                 }
                 let (ca, cb) = (corners[i], corners[(i + 1) % 4]);
-                let shift = if i % 2 == 1 {
-                    let (dx, dy) = (cb[0] - ca[0], cb[1] - ca[1]);
-                    let len = dx.hypot(dy).max(1e-9);
-                    let mut nn = [-dy / len, dx / len];
-                    let mid = [(ca[0] + cb[0]) / 2.0, (ca[1] + cb[1]) / 2.0];
-                    if (centre[0] - mid[0]) * nn[0] + (centre[1] - mid[1]) * nn[1] < 0.0 {
-                        nn = [-nn[0], -nn[1]];
-                    }
-                    [search_px * nn[0], search_px * nn[1]]
-                } else {
-                    [0.0, 0.0]
-                };
                 for k in 0..10 {
                     let f = (k as f64 + 0.5) / 10.0;
                     edges.push(EdgeObs {
                         a: sa,
                         b: sb,
-                        p: [
-                            ca[0] + f * (cb[0] - ca[0]) + shift[0],
-                            ca[1] + f * (cb[1] - ca[1]) + shift[1],
-                        ],
+                        p: [ca[0] + f * (cb[0] - ca[0]), ca[1] + f * (cb[1] - ca[1])],
                     });
                 }
             }
@@ -683,11 +665,10 @@ pub fn refine_roi(
         .zip(&corners)
         .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
         .fold(0.0, f64::max);
-    // (A strip's ends are also moved inward by the search range on purpose, and
-    // turned along the bars about their centres: each end corner slides along its
-    // long edge by up to half the largest slant.)
+    // (A strip's ends are turned along the bars about their centres: each end
+    // corner slides along its long edge by up to half the largest slant.)
     let trim = if target.is_none() {
-        search_px + 0.5 * max_slant
+        0.5 * max_slant
     } else {
         0.0
     };

@@ -90,19 +90,55 @@ impl Lattice {
     }
 }
 
-/// Estimates the chart's modulation by extrapolating the low-frequency end of the
-/// (non-aliased) modulation curve to zero frequency with a weighted quadratic
-/// in frequency. Returns the value and the range used (cycles/pixel).
-pub fn extrapolate_chart_modulation(points: &[MtfPoint]) -> Result<(f64, f64, f64), String> {
+/// The chart's modulation estimated from the low-frequency end of the curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChartModulation {
+    /// Modulation at 0 cy/px (0–1].
+    pub value: f64,
+    /// One-sigma uncertainty of `value` (noise, scatter and the choice of model).
+    pub err: f64,
+    /// Lowest frequency used (cycles/pixel).
+    pub f_lo: f64,
+    /// Highest frequency used (cycles/pixel).
+    pub f_hi: f64,
+    /// Weight (0–1) of the model with a linear start (diffraction-like) against
+    /// the even one (finite PSF spread: zero slope at 0).
+    pub linear_weight: f64,
+}
+
+/// Estimates the chart's modulation by extrapolating the low-frequency end of
+/// the (non-aliased) modulation curve to zero frequency.
+///
+/// Only points at `s ≥ s_min` are used (the caller leaves out the periods
+/// whose estimator window runs past the strip's end). Two models are fitted to
+/// the points up to max(2 f_lo, f_lo + 0.05) cy/px, each by iteratively
+/// reweighted least squares (Tukey biweight on residuals scaled by the points'
+/// own uncertainty and a robust scale, so one bad point cannot drag the fit):
+/// the even M0·(1 + b f² + c f⁴) that any PSF of finite spread has, and
+/// M0·(1 + b f + c f²) with diffraction's linear start. The two are averaged
+/// with Akaike weights from their robust χ² (scaled by the larger model's
+/// dispersion, since neighbouring points share data); the uncertainty is
+/// the averaged fit variance plus the spread between the models.
+pub fn extrapolate_chart_modulation(
+    points: &[MtfPoint],
+    s_min: f64,
+) -> Result<ChartModulation, String> {
     let mut pts: Vec<&MtfPoint> = points
         .iter()
-        .filter(|p| !p.aliased && p.modulation.is_finite())
+        .filter(|p| !p.aliased && p.modulation.is_finite() && p.freq_cy_px > 0.0)
         .collect();
     pts.sort_by(|a, b| a.freq_cy_px.total_cmp(&b.freq_cy_px));
-    let Some(first) = pts.first() else {
+    if pts.is_empty() {
         return Err("no modulation measured".into());
+    }
+    let inner: Vec<&MtfPoint> = pts.iter().copied().filter(|p| p.s >= s_min).collect();
+    // A strip too short, or starting too high, to leave its ends out: use what there is.
+    let pts = if inner.len() >= 6 && inner[0].freq_cy_px <= 0.08 {
+        inner
+    } else {
+        pts
     };
-    let f_lo = first.freq_cy_px;
+    let f_lo = pts[0].freq_cy_px;
     if f_lo > 0.08 {
         return Err(format!(
             "the sweep starts at {f_lo:.3} cy/px, too high to extrapolate to zero frequency; \
@@ -115,32 +151,128 @@ pub fn extrapolate_chart_modulation(points: &[MtfPoint]) -> Result<(f64, f64, f6
         .copied()
         .filter(|p| p.freq_cy_px <= f_hi)
         .collect();
-    if sel.len() < 6 {
-        sel = pts.iter().copied().take(6).collect();
+    if sel.len() < 8 {
+        sel = pts.iter().copied().take(8).collect();
     }
-    if sel.len() < 4 {
+    if sel.len() < 5 {
         return Err("too few low-frequency points to extrapolate to zero frequency".into());
     }
     let f_top = sel.last().map(|p| p.freq_cy_px).unwrap_or(f_hi);
-    // Weighted least squares M = a + b f + c f², using the modulation's own uncertainty.
-    let mut m = [[0.0f64; 3]; 3];
-    let mut r = [0.0f64; 3];
-    for p in &sel {
-        let e = (p.mtf_err * p.modulation / p.mtf.max(1e-12)).abs();
-        let w = 1.0 / (e * e + 1e-8);
-        let x = [1.0, p.freq_cy_px / f_top, (p.freq_cy_px / f_top).powi(2)];
-        for i in 0..3 {
-            r[i] += w * x[i] * p.modulation;
-            for j in 0..3 {
-                m[i][j] += w * x[i] * x[j];
-            }
-        }
-    }
-    let a = solve3(m, r).ok_or("the low-frequency points do not determine a curve")?[0];
-    if !(a > 0.0 && a.is_finite()) {
+    let data: Vec<(f64, f64, f64)> = sel
+        .iter()
+        .map(|p| {
+            let e = (p.mtf_err * p.modulation / p.mtf.max(1e-12)).abs();
+            // A floor so that noiseless points do not claim infinite weight.
+            let e = e.hypot(2e-4 * p.modulation.abs());
+            (p.freq_cy_px / f_top, p.modulation, e)
+        })
+        .collect();
+    let even = robust_fit(&data, |x| [1.0, x * x, x.powi(4)]);
+    let linear = robust_fit(&data, |x| [1.0, x, x * x]);
+    let (even, linear) = match (even, linear) {
+        (Some(e), Some(l)) => (e, l),
+        (Some(e), None) => (e, e),
+        (None, Some(l)) => (l, l),
+        (None, None) => return Err("the low-frequency points do not determine a curve".into()),
+    };
+    // Quasi-AIC: both models have three parameters, so only the fit counts;
+    // the linear start must win by LINEAR_EVIDENCE (a prior: at the low end of a
+    // sweep the lens's finite spread dominates unless diffraction's cutoff is
+    // low, and a slow bias in the lowest points must not pass for a slope).
+    let disp = (even.chi2.min(linear.chi2) / (even.dof.max(1.0))).max(1.0);
+    let d = (linear.chi2 - even.chi2) / disp + LINEAR_EVIDENCE;
+    let w_lin = 1.0 / (1.0 + (0.5 * d).clamp(-50.0, 50.0).exp());
+    let w_even = 1.0 - w_lin;
+    let value = w_even * even.m0 + w_lin * linear.m0;
+    let var = w_even * (even.var * disp.max(1.0) + (even.m0 - value).powi(2))
+        + w_lin * (linear.var * disp.max(1.0) + (linear.m0 - value).powi(2));
+    if !(value > 0.0 && value.is_finite()) {
         return Err("the extrapolated chart modulation is not positive".into());
     }
-    Ok((a, f_lo, f_top))
+    Ok(ChartModulation {
+        value,
+        err: var.sqrt(),
+        f_lo,
+        f_hi: f_top,
+        linear_weight: w_lin,
+    })
+}
+
+/// Quasi-AIC units by which the linear-start model must beat the even one to take half the weight.
+const LINEAR_EVIDENCE: f64 = 10.0;
+
+/// One robust fit: intercept, its variance, and the robust χ² with its degrees of freedom.
+#[derive(Debug, Clone, Copy)]
+struct RobustFit {
+    m0: f64,
+    var: f64,
+    chi2: f64,
+    dof: f64,
+}
+
+/// Iteratively reweighted least squares of y on the three basis functions of x,
+/// weights 1/e² times a Tukey biweight (c = 4.685) of the residuals over their
+/// robust scale.
+fn robust_fit(data: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<RobustFit> {
+    let mut tukey = vec![1.0f64; data.len()];
+    let mut coef = [0.0f64; 3];
+    let mut cov00 = 0.0;
+    for iter in 0..20 {
+        let mut m = [[0.0f64; 3]; 3];
+        let mut r = [0.0f64; 3];
+        for (k, &(x, y, e)) in data.iter().enumerate() {
+            let w = tukey[k] / (e * e);
+            let b = basis(x);
+            for i in 0..3 {
+                r[i] += w * b[i] * y;
+                for j in 0..3 {
+                    m[i][j] += w * b[i] * b[j];
+                }
+            }
+        }
+        let new = solve3(m, r)?;
+        // Variance of the intercept: first column of the inverse.
+        cov00 = solve3(m, [1.0, 0.0, 0.0])?[0];
+        let moved = (new[0] - coef[0]).abs();
+        coef = new;
+        let z: Vec<f64> = data
+            .iter()
+            .map(|&(x, y, e)| {
+                let b = basis(x);
+                (y - (coef[0] * b[0] + coef[1] * b[1] + coef[2] * b[2])) / e
+            })
+            .collect();
+        let mut abs: Vec<f64> = z.iter().map(|v| v.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        let mad = 1.4826 * abs[abs.len() / 2];
+        // The scale never falls below the claimed uncertainty (z of 1).
+        let scale = mad.max(1.0);
+        for (t, v) in tukey.iter_mut().zip(&z) {
+            let u = v / (4.685 * scale);
+            *t = if u.abs() < 1.0 {
+                (1.0 - u * u).powi(2)
+            } else {
+                0.0
+            };
+        }
+        if iter > 2 && moved < 1e-9 * coef[0].abs() {
+            break;
+        }
+    }
+    let mut chi2 = 0.0;
+    let mut wsum = 0.0;
+    for (k, &(x, y, e)) in data.iter().enumerate() {
+        let b = basis(x);
+        let res = (y - (coef[0] * b[0] + coef[1] * b[1] + coef[2] * b[2])) / e;
+        chi2 += tukey[k] * res * res;
+        wsum += tukey[k];
+    }
+    (coef[0].is_finite() && cov00.is_finite()).then_some(RobustFit {
+        m0: coef[0],
+        var: cov00.max(0.0),
+        chi2,
+        dof: (wsum - 3.0).max(1.0),
+    })
 }
 
 /// Solves a 3×3 linear system by Gaussian elimination with partial pivoting.
@@ -269,14 +401,18 @@ mod tests {
     fn extrapolates_gaussian_and_diffraction_like_curves() {
         let sigma: f64 = 0.9;
         let gauss = |f: f64| (-2.0 * std::f64::consts::PI.powi(2) * sigma * sigma * f * f).exp();
-        let (a, _, _) = extrapolate_chart_modulation(&curve(0.8, gauss)).unwrap();
+        let a = extrapolate_chart_modulation(&curve(0.8, gauss), 0.0)
+            .unwrap()
+            .value;
         assert!((a - 0.8).abs() < 0.8 * 1e-3, "{a}");
         // Diffraction (circular pupil), cutoff 0.9 cy/px: non-zero slope at 0.
         let diff = |f: f64| {
             let x: f64 = f / 0.9;
             2.0 / std::f64::consts::PI * (x.acos() - x * (1.0 - x * x).sqrt())
         };
-        let (a, _, _) = extrapolate_chart_modulation(&curve(0.6, diff)).unwrap();
+        let a = extrapolate_chart_modulation(&curve(0.6, diff), 0.0)
+            .unwrap()
+            .value;
         assert!((a - 0.6).abs() < 0.6 * 1e-3, "{a}");
     }
 

@@ -8,6 +8,7 @@
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::distortion::Lens;
 use crate::geometry::{Homography, Point};
 use crate::photo::Plane;
 use rayon::prelude::*;
@@ -16,8 +17,11 @@ use rayon::prelude::*;
 /// low-frequency edge, t across) and where that frame lies in the image.
 #[derive(Debug, Clone)]
 pub struct Strip {
-    /// Maps strip coordinates (s, t) to image pixel coordinates.
+    /// Maps strip coordinates (s, t) to image pixel coordinates (undistorted
+    /// ones when `lens` is given).
     pub to_image: Homography,
+    /// Lens distortion from undistorted to photo pixel coordinates, if any.
+    pub lens: Option<Lens>,
     /// Length along the sweep (strip units: mm with a target, else 1).
     pub length: f64,
     /// Width across the sweep (strip units).
@@ -34,15 +38,62 @@ pub struct LocalScale {
 }
 
 impl Strip {
-    /// The four image corners of the strip region t ∈ [t0, t1] over its whole length.
+    /// Where strip point (s, t) lies in the photo (pixels).
+    pub fn to_photo(&self, p: Point) -> Point {
+        let q = self.to_image.apply(p);
+        self.lens.as_ref().map_or(q, |l| l.distort(q))
+    }
+
+    /// The four photo corners of the strip region t ∈ [t0, t1] over its whole length.
     pub fn image_quad(&self, t0: f64, t1: f64) -> [Point; 4] {
         let l = self.length;
-        [[0.0, t0], [l, t0], [l, t1], [0.0, t1]].map(|p| self.to_image.apply(p))
+        [[0.0, t0], [l, t0], [l, t1], [0.0, t1]].map(|p| self.to_photo(p))
+    }
+
+    /// How far (px) the photo's outline of region t ∈ [t0, t1] bows out of
+    /// [`Strip::image_quad`] (0 without distortion).
+    pub fn bow_px(&self, t0: f64, t1: f64) -> f64 {
+        if self.lens.is_none() {
+            return 0.0;
+        }
+        let q = self.image_quad(t0, t1);
+        let l = self.length;
+        let edges = [
+            ([0.0, t0], [l, t0], 0),
+            ([l, t0], [l, t1], 1),
+            ([l, t1], [0.0, t1], 2),
+            ([0.0, t1], [0.0, t0], 3),
+        ];
+        let mut worst = 0.0f64;
+        for (a, b, k) in edges {
+            let (p0, p1) = (q[k], q[(k + 1) % 4]);
+            let len = (p1[0] - p0[0]).hypot(p1[1] - p0[1]).max(1e-9);
+            for i in 1..32 {
+                let u = i as f64 / 32.0;
+                let p = self.to_photo([a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])]);
+                let d = ((p1[0] - p0[0]) * (p[1] - p0[1]) - (p1[1] - p0[1]) * (p[0] - p0[0])) / len;
+                worst = worst.max(d.abs());
+            }
+        }
+        worst
     }
 
     /// Scale and direction of the sweep in the image at distance `s` along the strip's centre line.
     pub fn scale_at(&self, s: f64) -> LocalScale {
-        let j = self.to_image.jacobian([s, 0.5 * self.width]);
+        let mut j = self.to_image.jacobian([s, 0.5 * self.width]);
+        if let Some(l) = &self.lens {
+            let d = l.jacobian(self.to_image.apply([s, 0.5 * self.width]));
+            j = [
+                [
+                    d[0][0] * j[0][0] + d[0][1] * j[1][0],
+                    d[0][0] * j[0][1] + d[0][1] * j[1][1],
+                ],
+                [
+                    d[1][0] * j[0][0] + d[1][1] * j[1][0],
+                    d[1][0] * j[0][1] + d[1][1] * j[1][1],
+                ],
+            ];
+        }
         // Inverse Jacobian: d(s,t)/d(x,y); its first row is ∇s.
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         let gx = j[1][1] / det;
@@ -136,6 +187,21 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
         return Profile::default();
     }
     let nbins = ((strip.length / bin).ceil() as usize).max(1);
+    if let Some(lens) = &strip.lens {
+        let mut prof = bin_through_lens(
+            planes,
+            strip,
+            lens,
+            inv.m,
+            (t0, t1, s_lo, s_hi),
+            bin,
+            nbins,
+            opts.clip_level,
+        );
+        prof.bin = bin;
+        prof.length = strip.length;
+        return prof;
+    }
     let quad = strip.image_quad(t0, t1);
     let ymin = quad.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
     let ymax = quad.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max);
@@ -280,6 +346,171 @@ pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profil
         }
     }
     prof
+}
+
+/// Binning through a lens model (the photo's iso-phase lines are curves):
+/// every sample centre inside the region's photo outline is undistorted, then
+/// mapped by the inverse homography `inv` to (s, t); bins take the plain
+/// two-pass robust mean (3σ about the bin's mean, as the fast path). The rows
+/// are read in parallel, the bins filled in row order (results do not depend
+/// on threads).
+#[allow(clippy::too_many_arguments)]
+fn bin_through_lens(
+    planes: &[&Plane],
+    strip: &Strip,
+    lens: &Lens,
+    inv: [f64; 9],
+    (t0, t1, s_lo, s_hi): (f64, f64, f64, f64),
+    bin: f64,
+    nbins: usize,
+    clip_level: f32,
+) -> Profile {
+    let mut m = inv;
+    let c = strip
+        .to_image
+        .apply([0.5 * strip.length, 0.5 * strip.width]);
+    if m[6] * c[0] + m[7] * c[1] + m[8] < 0.0 {
+        m.iter_mut().for_each(|v| *v = -*v);
+    }
+    // The region's outline in the photo, densely sampled (its edges are curves).
+    let l = strip.length;
+    let mut outline = Vec::new();
+    let n_long = 128;
+    for i in 0..n_long {
+        outline.push(strip.to_photo([l * i as f64 / n_long as f64, t0]));
+    }
+    for i in 0..8 {
+        outline.push(strip.to_photo([l, t0 + (t1 - t0) * i as f64 / 8.0]));
+    }
+    for i in 0..n_long {
+        outline.push(strip.to_photo([l * (1.0 - i as f64 / n_long as f64), t1]));
+    }
+    for i in 0..8 {
+        outline.push(strip.to_photo([0.0, t1 - (t1 - t0) * i as f64 / 8.0]));
+    }
+    let ymin = outline.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min) - 1.0;
+    let ymax = outline
+        .iter()
+        .map(|p| p[1])
+        .fold(f64::NEG_INFINITY, f64::max)
+        + 1.0;
+    let last = nbins - 1;
+    let inv_bin = 1.0 / bin;
+    // (bin, s, value) of every sample inside, row by row.
+    let mut rows: Vec<(usize, usize)> = Vec::new();
+    for (p, plane) in planes.iter().enumerate() {
+        let oy = plane.offset.1 as f64 + 0.5;
+        let sy = plane.step.1 as f64;
+        let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
+        let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
+        rows.extend((j0..j1).map(|j| (p, j)));
+    }
+    let samples: Vec<Vec<(u32, f64, f32)>> = rows
+        .par_iter()
+        .map(|&(p, j)| {
+            let plane = planes[p];
+            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            let y = oy + j as f64 * sy;
+            let mut out = Vec::new();
+            let Some((xa, xb)) = outline_span(&outline, y) else {
+                return out;
+            };
+            let i0 = (((xa - 1.5 - ox) / sx).floor().max(0.0) as usize).min(plane.width);
+            let i1 = (((xb + 1.5 - ox) / sx).ceil().max(0.0) as usize + 1).min(plane.width);
+            let row = &plane.data[j * plane.width..(j + 1) * plane.width];
+            for i in i0..i1 {
+                let x = ox + i as f64 * sx;
+                let [xu, yu] = lens.undistort([x, y]);
+                let w = m[6] * xu + m[7] * yu + m[8];
+                if !(w > 0.0) {
+                    continue;
+                }
+                let s = (m[0] * xu + m[1] * yu + m[2]) / w;
+                let t = (m[3] * xu + m[4] * yu + m[5]) / w;
+                if t >= t0 && t <= t1 && s >= s_lo && s <= s_hi {
+                    out.push((((s * inv_bin) as usize).min(last) as u32, s, row[i]));
+                }
+            }
+            out
+        })
+        .collect();
+    #[derive(Clone, Copy, Default)]
+    struct Sums {
+        n: u32,
+        sum: f64,
+        sum2: f64,
+        ssum: f64,
+        ssum2: f64,
+        rsum: f64,
+        rn: u32,
+    }
+    let mut acc = vec![Sums::default(); nbins];
+    let mut prof = Profile::default();
+    for &(b, s, v) in samples.iter().flatten() {
+        let a = &mut acc[b as usize];
+        let vd = v as f64;
+        a.n += 1;
+        a.sum += vd;
+        a.sum2 += vd * vd;
+        a.ssum += s;
+        a.ssum2 += s * s;
+        prof.samples += 1;
+        prof.clipped_high += (v >= clip_level) as usize;
+        prof.clipped_low += (v <= 0.0) as usize;
+    }
+    let lims: Vec<(f64, f64)> = acc
+        .iter()
+        .map(|a| {
+            let c = a.n.max(1) as f64;
+            let mu = a.sum / c;
+            (mu, 3.0 * (a.sum2 / c - mu * mu).max(0.0).sqrt() + 1e-6)
+        })
+        .collect();
+    for &(b, _, v) in samples.iter().flatten() {
+        let (mu, lim) = lims[b as usize];
+        if (v as f64 - mu).abs() <= lim {
+            acc[b as usize].rsum += v as f64;
+            acc[b as usize].rn += 1;
+        }
+    }
+    for a in &acc {
+        if a.n == 0 {
+            continue;
+        }
+        let c = a.n as f64;
+        let ms = a.ssum / c;
+        prof.s.push(ms);
+        prof.var_s.push((a.ssum2 / c - ms * ms).max(0.0));
+        if a.n >= 4 && a.rn > 0 {
+            prof.y.push(a.rsum / a.rn as f64);
+            prof.count.push(a.rn as f64);
+        } else {
+            prof.y.push(a.sum / c);
+            prof.count.push(c);
+        }
+    }
+    prof
+}
+
+/// The x-extent where the horizontal line at `y` crosses a closed polygon.
+fn outline_span(poly: &[Point], y: f64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for k in 0..poly.len() {
+        let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+        if (a[1] <= y && b[1] >= y) || (b[1] <= y && a[1] >= y) {
+            let x = if (b[1] - a[1]).abs() < 1e-12 {
+                lo = lo.min(a[0].min(b[0]));
+                hi = hi.max(a[0].max(b[0]));
+                continue;
+            } else {
+                a[0] + (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1])
+            };
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
 }
 
 /// How many of the most extreme samples each bin keeps on either side.
@@ -595,6 +826,7 @@ mod tests {
     fn strip_for(quad: [Point; 4], len: f64, wid: f64) -> Strip {
         let src = crate::geometry::rect_corners(0.0, 0.0, len, wid);
         Strip {
+            lens: None,
             to_image: Homography::from_quads(&src, &quad).unwrap(),
             length: len,
             width: wid,

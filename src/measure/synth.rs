@@ -44,12 +44,71 @@ pub struct SynthShot {
     pub noise: Option<(f64, f64)>,
     /// JPEG quality; None = lossless PNG.
     pub jpeg_quality: Option<u8>,
+    /// What real lenses, lights and cameras add (all off by default).
+    pub nuisance: Nuisances,
+}
+
+/// Nuisances of real shots, each rendered with exact truth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Nuisances {
+    /// Illumination ratio between the strip's low- and high-frequency ends
+    /// (1 = even; 3 = the low end 3× brighter), exponential in the image
+    /// position projected on the strip's axis.
+    pub light_ratio: f64,
+    /// Vignetting: relative illumination at the frame corner (1 = none,
+    /// 0.5 = 50 % falloff), shaped (1 + k r²)⁻² about the frame centre.
+    pub vignette_corner: f64,
+    /// Unsharp mask in linear light, (amount a, Gaussian radius σ in px):
+    /// the MTF becomes truth × (1 + a(1 − exp(−2π²σ²f²))).
+    pub usm: Option<(f64, f64)>,
+    /// Colour of the light as gains of R, G, B (the shot is then RGB); None = grey.
+    pub rgb_gains: Option<[f64; 3]>,
+    /// JPEG with 4:2:0 chroma subsampling (else 4:4:4 through `image`).
+    pub chroma_420: bool,
+}
+
+impl Default for Nuisances {
+    fn default() -> Self {
+        Nuisances {
+            light_ratio: 1.0,
+            vignette_corner: 1.0,
+            usm: None,
+            rgb_gains: None,
+            chroma_420: false,
+        }
+    }
 }
 
 impl SynthShot {
     /// The true MTF at `f` cycles/pixel.
     pub fn truth(&self, f: f64) -> f64 {
-        (-2.0 * PI * PI * self.sigma_px * self.sigma_px * f * f).exp()
+        let blur = (-2.0 * PI * PI * self.sigma_px * self.sigma_px * f * f).exp();
+        match self.nuisance.usm {
+            Some((a, r)) => blur * (1.0 + a * (1.0 - (-2.0 * PI * PI * r * r * f * f).exp())),
+            None => blur,
+        }
+    }
+
+    /// Relative illumination (1 at the strip's low-frequency end on the frame's centre) at pixel centre `p`.
+    pub fn light_at(&self, p: Point) -> f64 {
+        let n = &self.nuisance;
+        let mut l = 1.0;
+        if n.light_ratio != 1.0 && n.light_ratio > 0.0 {
+            let q = self.quad;
+            let a = [0.5 * (q[0][0] + q[3][0]), 0.5 * (q[0][1] + q[3][1])];
+            let b = [0.5 * (q[1][0] + q[2][0]), 0.5 * (q[1][1] + q[2][1])];
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let t = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy);
+            l *= n.light_ratio.powf(-t);
+        }
+        if n.vignette_corner < 1.0 && n.vignette_corner > 0.0 {
+            let (cx, cy) = (0.5 * self.width as f64, 0.5 * self.height as f64);
+            let rc2 = cx * cx + cy * cy;
+            let k = (n.vignette_corner.powf(-0.5) - 1.0) / rc2;
+            let r2 = (p[0] - cx).powi(2) + (p[1] - cy).powi(2);
+            l /= (1.0 + k * r2).powi(2);
+        }
+        l
     }
 
     fn homography(&self) -> Homography {
@@ -75,6 +134,8 @@ impl SynthShot {
         for y in 0..self.height {
             for x in 0..self.width {
                 let p = [x as f64 + 0.5, y as f64 + 0.5];
+                let light = self.light_at(p);
+                out[y * self.width + x] = self.mean * light;
                 let q = inv.apply(p);
                 let (s, t) = (q[0], q[1]);
                 if !(0.0..=self.length).contains(&s) || !(0.0..=self.strip_width).contains(&t) {
@@ -84,7 +145,7 @@ impl SynthShot {
                 let f = self.law.freq(s) * j[0][0].hypot(j[0][1]);
                 let m = self.contrast * self.truth(f);
                 out[y * self.width + x] =
-                    self.mean * (1.0 + m * (2.0 * PI * self.law.phase(s)).cos());
+                    light * self.mean * (1.0 + m * (2.0 * PI * self.law.phase(s)).cos());
             }
         }
         out
@@ -94,31 +155,63 @@ impl SynthShot {
     pub fn encode(&self, seed: u64) -> Vec<u8> {
         let lin = self.render_linear();
         let mut st = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
+        let gains = self.nuisance.rgb_gains.unwrap_or([1.0; 3]);
+        let channels = if self.nuisance.rgb_gains.is_some() {
+            3
+        } else {
+            1
+        };
+        let mut code = |v: f64| -> u8 {
+            let v = match self.noise {
+                Some((full, read)) => {
+                    let e = v * full;
+                    (e + (e.max(0.0) + read * read).sqrt() * normal(&mut st)) / full
+                }
+                None => v,
+            };
+            (255.0 * linear_to_srgb(v.clamp(0.0, 1.0))).round() as u8
+        };
         let codes: Vec<u8> = lin
             .iter()
-            .map(|&v| {
-                let v = match self.noise {
-                    Some((full, read)) => {
-                        let e = v * full;
-                        (e + (e.max(0.0) + read * read).sqrt() * normal(&mut st)) / full
-                    }
-                    None => v,
-                };
-                (255.0 * linear_to_srgb(v.clamp(0.0, 1.0))).round() as u8
+            .flat_map(|&v| {
+                let mut px = [0u8; 3];
+                for c in 0..channels {
+                    px[c] = code(v * gains[c]);
+                }
+                px.into_iter().take(channels)
             })
             .collect();
         let mut buf = Cursor::new(Vec::new());
         let (w, h) = (self.width as u32, self.height as u32);
+        let rgb = || -> Vec<u8> {
+            if channels == 3 {
+                codes.clone()
+            } else {
+                codes.iter().flat_map(|&c| [c, c, c]).collect()
+            }
+        };
         match self.jpeg_quality {
-            None => {
+            None if channels == 1 => {
                 let img = image::GrayImage::from_raw(w, h, codes).expect("size");
                 img.write_to(&mut buf, image::ImageFormat::Png)
                     .expect("PNG encoding in memory");
             }
+            None => {
+                let img = image::RgbImage::from_raw(w, h, codes).expect("size");
+                img.write_to(&mut buf, image::ImageFormat::Png)
+                    .expect("PNG encoding in memory");
+            }
+            Some(q) if self.nuisance.chroma_420 => {
+                let mut out = Vec::new();
+                let mut enc = jpeg_encoder::Encoder::new(&mut out, q);
+                enc.set_sampling_factor(jpeg_encoder::SamplingFactor::R_4_2_0);
+                enc.encode(&rgb(), w as u16, h as u16, jpeg_encoder::ColorType::Rgb)
+                    .expect("JPEG encoding in memory");
+                return out;
+            }
             Some(q) => {
-                let rgb: Vec<u8> = codes.iter().flat_map(|&c| [c, c, c]).collect();
                 let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut buf, q);
-                enc.encode(&rgb, w, h, image::ExtendedColorType::Rgb8)
+                enc.encode(&rgb(), w, h, image::ExtendedColorType::Rgb8)
                     .expect("JPEG encoding in memory");
             }
         }
@@ -179,6 +272,7 @@ pub fn standard_cases() -> Vec<SynthShot> {
         sigma_px: 0.8,
         noise: None,
         jpeg_quality: None,
+        nuisance: Nuisances::default(),
     };
     let noisy = |name: &str, rot: f64, tilt: f64| {
         let big = rot.abs() > 1.0 || tilt > 1.0;
@@ -235,4 +329,123 @@ pub fn big_shot() -> SynthShot {
         },
         ..base
     }
+}
+
+/// The 24-megapixel shot of the libjpeg-turbo comparison (issue 16,
+/// examples/djpeg_ratio.rs): 6000×4000, a 5200×1700 px log sweep
+/// 0.004→0.6 cy/px turned 1° (its corners cover ≈ 37 % of the frame),
+/// SNR ≈ 50, JPEG q92.
+pub fn wide_strip_shot() -> SynthShot {
+    let big = big_shot();
+    SynthShot {
+        name: "wide".into(),
+        quad: strip_quad(3000.0, 2000.0, 5200.0, 1700.0, 1.0, 0.0),
+        length: 5200.0,
+        strip_width: 1700.0,
+        law: super::PhaseLaw {
+            c2: (0.6f64 / 0.004).ln() / 5200.0,
+            ..big.law
+        },
+        jpeg_quality: Some(92),
+        ..big
+    }
+}
+
+/// The shots of issue 15's nuisances, with exact truth: illumination 3:1 along
+/// the strip with 50 % vignetting, a keystoned linear sweep (one end 1.5× the
+/// other's height), unsharp-mask sharpening peaking near 1.15, and RGB JPEG
+/// q75 with 4:2:0 chroma and noise. `variant` moves the strip, its size, turn
+/// and blur a little (0 is the set the report uses; tests use others).
+pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
+    use super::law::LawKind;
+    // A small deterministic spread of geometry per variant.
+    let mut st = variant.wrapping_mul(0x2545_F491_4F6C_DD1D).wrapping_add(17);
+    let mut u = || {
+        st = st
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((st >> 11) as f64 + 0.5) / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let (w, h) = (2400usize, 1600usize);
+    let len = 1800.0 + 150.0 * u();
+    let wid = 130.0 + 30.0 * u();
+    let (cx, cy) = (1200.0 + 150.0 * u(), 800.0 + 300.0 * u());
+    let rot = 4.0 * u();
+    let sigma = 0.8 + 0.08 * u();
+    let (f0, f1) = (0.004 + 0.001 * u(), 0.6);
+    let log = PhaseLaw {
+        kind: LawKind::Log,
+        c0: 0.0,
+        c1: f0,
+        c2: (f1 / f0).ln() / len,
+    };
+    let base = SynthShot {
+        name: String::new(),
+        width: w,
+        height: h,
+        quad: strip_quad(cx, cy, len, wid, rot, 0.0),
+        length: len,
+        strip_width: wid,
+        law: log,
+        mean: 0.45,
+        contrast: 0.8,
+        sigma_px: sigma,
+        noise: Some((5560.0, 3.0)),
+        jpeg_quality: None,
+        nuisance: Nuisances::default(),
+    };
+    // Keystone: the high-frequency end 1/1.5 the height of the low one, as a
+    // chart turned about its vertical axis (true perspective through the homography).
+    let key = {
+        let (c, s) = (rot.to_radians().cos(), rot.to_radians().sin());
+        let (hl, hr) = (0.5 * wid, 0.5 * wid / 1.5);
+        let half = 0.5 * len * 0.85;
+        [[-half, -hl], [half, -hr], [half, hr], [-half, hl]]
+            .map(|[x, y]| [cx + c * x - s * y, cy + s * x + c * y])
+    };
+    vec![
+        SynthShot {
+            name: "light3_vignette50".into(),
+            // Brighter at the low-frequency end; a light level that keeps the
+            // brightest part (centre, low end) below clipping.
+            mean: 0.3,
+            nuisance: Nuisances {
+                light_ratio: 3.0,
+                vignette_corner: 0.5,
+                ..Nuisances::default()
+            },
+            ..base.clone()
+        },
+        SynthShot {
+            name: "keystone1.5_linear".into(),
+            quad: key,
+            law: PhaseLaw {
+                kind: LawKind::Linear,
+                c0: 0.0,
+                c1: f0,
+                c2: (0.4 - f0) / (2.0 * len),
+            },
+            ..base.clone()
+        },
+        SynthShot {
+            name: "usm_peak1.15".into(),
+            sigma_px: 0.92 + 0.02 * u(),
+            nuisance: Nuisances {
+                usm: Some((1.0, 1.5)),
+                ..Nuisances::default()
+            },
+            ..base.clone()
+        },
+        SynthShot {
+            name: "rgb_jpeg75_420".into(),
+            jpeg_quality: Some(75),
+            nuisance: Nuisances {
+                // A slight colour cast left after white balance.
+                rgb_gains: Some([0.95, 1.0, 0.9]),
+                chroma_420: true,
+                ..Nuisances::default()
+            },
+            ..base
+        },
+    ]
 }

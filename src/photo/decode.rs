@@ -4,9 +4,11 @@
 //! The result keeps the file's own code values (no conversion to float, no
 //! linearisation) so that a 24-megapixel JPEG costs exactly its decoded size;
 //! [`super::linearise`] turns only the needed region into linear [`super::Plane`]s.
-//! An alpha channel is dropped. Truncated JPEGs (no end-of-image marker) are
+//! JPEGs go through [`super::jpeg`] (zune-jpeg directly, reading only the
+//! rows and planes asked for). An alpha channel is dropped. Truncated JPEGs (no end-of-image marker) are
 //! refused rather than silently filled with grey.
 
+use super::jpeg::{JpegWant, decode_jpeg};
 use image::{ColorType, DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 use std::io::Cursor;
 use std::path::Path;
@@ -48,6 +50,9 @@ pub enum Samples {
     U8(Vec<u8>),
     /// 16-bit code values (0–65535).
     U16(Vec<u16>),
+    /// Floating-point code values (0 = black, 1 = white), from an array in memory
+    /// (see [`crate::measure::in_memory`]); no file format decodes to these.
+    F32(Vec<f32>),
 }
 
 /// A decoded photo: code values as stored in the file.
@@ -63,14 +68,20 @@ pub struct Decoded {
     pub samples: Samples,
     /// The container format ("jpeg", "png", "tiff").
     pub format: &'static str,
+    /// Rows from the top that hold the picture (`height` unless the decode
+    /// was cut below the rows a caller asked for; rows below are zero).
+    pub rows: usize,
+    /// What the decoder had to forgive (e.g. corrupt scan data), one line each.
+    pub warnings: Vec<String>,
 }
 
 impl Decoded {
-    /// Bits per sample (8 or 16).
+    /// Bits per sample (8 or 16; 32 for floating-point samples).
     pub fn bits(&self) -> u32 {
         match self.samples {
             Samples::U8(_) => 8,
             Samples::U16(_) => 16,
+            Samples::F32(_) => 32,
         }
     }
 
@@ -80,6 +91,7 @@ impl Decoded {
         match &self.samples {
             Samples::U8(v) => v[i] as f32 / 255.0,
             Samples::U16(v) => v[i] as f32 / 65535.0,
+            Samples::F32(v) => v[i],
         }
     }
 }
@@ -96,6 +108,12 @@ pub fn decode_file(path: &Path) -> Result<Decoded, DecodeError> {
 
 /// Decodes an in-memory JPEG, PNG or TIFF file; `name` is used in error messages.
 pub fn decode_bytes(bytes: &[u8], name: &str) -> Result<Decoded, DecodeError> {
+    decode_bytes_want(bytes, name, JpegWant::default())
+}
+
+/// Decodes an in-memory photo file, a JPEG only as far as `want` asks
+/// (see [`super::jpeg`]); other formats whole.
+pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, DecodeError> {
     let unsupported = |what: String| DecodeError::Unsupported {
         path: name.to_string(),
         what,
@@ -123,6 +141,9 @@ pub fn decode_bytes(bytes: &[u8], name: &str) -> Result<Decoded, DecodeError> {
         return Err(corrupt(
             "JPEG data ends without an end-of-image marker (file truncated?)".into(),
         ));
+    }
+    if format == ImageFormat::Jpeg {
+        return decode_jpeg(bytes, name, want);
     }
     let mut reader = ImageReader::new(Cursor::new(bytes));
     reader.set_format(format);
@@ -168,6 +189,8 @@ pub fn decode_bytes(bytes: &[u8], name: &str) -> Result<Decoded, DecodeError> {
             channels,
             samples,
             format: format_name,
+            rows: height,
+            warnings: Vec::new(),
         });
     }
     let img = DynamicImage::from_decoder(decoder).map_err(fail)?;
@@ -193,6 +216,8 @@ pub fn decode_bytes(bytes: &[u8], name: &str) -> Result<Decoded, DecodeError> {
         channels,
         samples,
         format: format_name,
+        rows: height,
+        warnings: Vec::new(),
     })
 }
 

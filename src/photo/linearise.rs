@@ -219,12 +219,14 @@ pub fn planes_within(
     channel: Channel,
     span: &(dyn Fn(usize) -> (usize, usize) + Sync),
 ) -> Vec<Plane> {
+    debug_assert!(crop.y1 <= dec.rows, "rows below the decoded part are read");
     let (w, h) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
-    let levels = match dec.samples {
-        Samples::U8(_) => 256,
-        Samples::U16(_) => 65536,
+    // Integer codes go through a lookup table; float codes through the tone itself.
+    let lut = match dec.samples {
+        Samples::U8(_) => tone.lut(256),
+        Samples::U16(_) => tone.lut(65536),
+        Samples::F32(_) => Vec::new(),
     };
-    let lut = tone.lut(levels);
     let nc = dec.channels;
     // Which channels feed the planes, and with what weight.
     let mixes: Vec<Vec<(usize, f32)>> = if nc == 1 {
@@ -254,6 +256,7 @@ pub fn planes_within(
                 match &dec.samples {
                     Samples::U8(v) => convert_row(row, &v[src], nc, mix, &lut),
                     Samples::U16(v) => convert_row(row, &v[src], nc, mix, &lut),
+                    Samples::F32(v) => convert_row_f32(row, &v[src], nc, mix, tone),
                 }
             });
             Plane {
@@ -296,6 +299,22 @@ fn convert_row<T: Copy + Into<usize>>(
     }
 }
 
+/// Like [`convert_row`] for floating-point codes (0–1): the tone is applied
+/// to each sample (no table); `Gamma(1)` (already linear) only clamps at 0.
+fn convert_row_f32(out: &mut [f32], codes: &[f32], nc: usize, mix: &[(usize, f32)], tone: &Tone) {
+    let identity = *tone == Tone::Gamma(1.0);
+    let lin = |c: f32| {
+        if identity {
+            c.max(0.0)
+        } else {
+            tone.apply(c as f64) as f32
+        }
+    };
+    for (o, p) in out.iter_mut().zip(codes.chunks_exact(nc)) {
+        *o = mix.iter().map(|&(c, wt)| wt * lin(p[c])).sum();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -322,6 +341,8 @@ mod tests {
                 255, 255, 255, 0, 0, 0, 128, 128, 128,
             ]),
             format: "png",
+            rows: 2,
+            warnings: Vec::new(),
         };
         let crop = Crop {
             x0: 1,

@@ -3,6 +3,7 @@
 //! and the renderer's accuracy settings. Serialised into every shot's JSON.
 
 use super::SimError;
+use crate::distortion::{Lens, Ptlens};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::str::FromStr;
@@ -257,6 +258,10 @@ pub struct Camera {
     pub bayer: Option<BayerOrder>,
     /// Relative gains of the R, G, B photosites of the mosaic (white balance as shot).
     pub bayer_gains: [f64; 3],
+    /// Radial lens distortion (PTLens form, radius normalised by half the
+    /// frame's smaller side; see [`crate::distortion`]); `None` = a perfect
+    /// rectilinear lens.
+    pub distortion: Option<Ptlens>,
     /// Whether and how the pixel area is integrated.
     pub pixel_aperture: PixelAperture,
     /// Renderer accuracy settings.
@@ -289,6 +294,7 @@ impl Default for Camera {
             jpeg_quality: None,
             bayer: None,
             bayer_gains: [0.55, 1.0, 0.75],
+            distortion: None,
             pixel_aperture: PixelAperture::Auto,
             render: RenderSettings::default(),
         }
@@ -324,6 +330,13 @@ impl Camera {
     /// Pixel pitch in millimetres.
     pub fn pitch_mm(&self) -> f64 {
         self.pixel_pitch_um * 1e-3
+    }
+
+    /// The distortion placed on this frame, when there is one (all-zero coefficients count as none).
+    pub fn lens(&self) -> Option<Lens> {
+        self.distortion
+            .filter(|d| !d.is_zero())
+            .map(|d| Lens::new(d, self.width_px, self.height_px))
     }
 
     /// Checks every setting's range; the error names the setting.
@@ -440,6 +453,9 @@ impl Camera {
             && !(g.is_finite() && g > 0.0)
         {
             return bad(format!("gamma {g} must be positive"));
+        }
+        if let Some(l) = self.lens() {
+            l.check().map_err(SimError::Parameter)?;
         }
         let r = &self.render;
         if !(1..=16).contains(&r.oversample) {

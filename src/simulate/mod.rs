@@ -79,9 +79,9 @@ pub struct Shot {
     pub signal: Vec<f32>,
     /// The recorded linear image: signal with noise, clipped to [0, 1]; what is encoded.
     pub linear: Vec<f32>,
-    /// Chart (mm) → image (px).
+    /// Chart (mm) → image (px) before lens distortion (see `camera.distortion`).
     pub chart_to_image: Homography,
-    /// The target frame's corners (0,0),(w,0),(w,h),(0,h) in image pixels.
+    /// The target frame's corners (0,0),(w,0),(w,h),(0,h) in image pixels (where they land in the photo).
     pub target_corners: [f64; 8],
     /// The target's name.
     pub target_name: String,
@@ -128,6 +128,8 @@ impl Shot {
             "homography_chart_to_image": self.chart_to_image.m,
             "chart_modulation": self.sweeps.first().map(|s| s.chart_contrast),
             "bayer": c.bayer.map(|b| b.to_string()),
+            "distortion": c.distortion.map(|d| d.to_string()),
+            "distortion_corner_percent": c.lens().map(|l| l.corner_percent()),
             "encoding": c.stored_encoding().to_string(),
             "bits": c.stored_bits(),
             "factors_applied": self.factors_applied,
@@ -193,7 +195,9 @@ pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot,
         seed: camera.seed,
     };
     let linear = noise::apply(&model, &signal, w);
-    let (sweeps, patches) = truth::truths(target, &placement.chart_to_image, &optics);
+    let lens = camera.lens();
+    let (sweeps, patches) =
+        truth::truths(target, &placement.chart_to_image, lens.as_ref(), &optics);
     let mut warnings = Vec::new();
     let band = camera.render.oversample as f64 / 2.0;
     for s in &sweeps {
@@ -220,8 +224,9 @@ pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot,
         signal,
         linear,
         chart_to_image: placement.chart_to_image,
-        target_corners: truth::quad_px(
+        target_corners: truth::quad_px_lens(
             &placement.chart_to_image,
+            lens.as_ref(),
             rect_corners(0.0, 0.0, target.width_mm, target.height_mm),
         ),
         target_name: target.name.clone(),

@@ -3,7 +3,8 @@
 //!
 //! Method (per tile, tiles overlapping by `margin_px`): sample the chart's
 //! reflectance at `k = oversample` points per pixel and axis in image space
-//! (each fine point mapped to the chart through the inverse homography; the
+//! (each fine point undistorted by the camera's lens model, when it has one,
+//! and mapped to the chart through the inverse homography; the
 //! fine grid contains every pixel centre), take the 2-D real FFT, multiply by
 //! the presampling OTF — system factors × pixel aperture — at the fine grid's
 //! frequencies (cycles/pixel → cycles/mm through the pitch; image y points
@@ -207,6 +208,8 @@ impl Plan {
 struct Scene<'a> {
     target: &'a Target,
     image_to_chart: Homography,
+    /// Lens distortion: photo points are undistorted before the homography.
+    lens: Option<crate::distortion::Lens>,
     surround: f64,
     /// Sub-samples per fine-cell side where a cell straddles a region boundary.
     edge_subsamples: usize,
@@ -215,6 +218,13 @@ struct Scene<'a> {
 impl Scene<'_> {
     #[inline]
     fn chart(&self, x: f64, y: f64) -> (f64, f64) {
+        let (x, y) = match &self.lens {
+            Some(l) => {
+                let p = l.undistort([x, y]);
+                (p[0], p[1])
+            }
+            None => (x, y),
+        };
         let m = &self.image_to_chart.m;
         let w = m[6] * x + m[7] * y + m[8];
         (
@@ -380,6 +390,7 @@ pub fn render_reflectance(
     let scene = Scene {
         target,
         image_to_chart,
+        lens: camera.lens(),
         surround: camera.surround,
         edge_subsamples: camera.render.edge_subsamples,
     };

@@ -6,8 +6,13 @@
 //! local frequency vector is ∇ψ = J⁻ᵀ·∇φ, J the homography's Jacobian at the
 //! chart point (image px per chart mm). The MTF is |OTF| at that vector (with
 //! perspective it changes along the strip and is evaluated on the centre line).
+//! With lens distortion D (photo = D(undistorted)), J becomes J_D·J_H (the
+//! distortion's Jacobian at the undistorted point times the homography's), and
+//! every position is reported where it lands in the photo: distortion moves
+//! the pattern and changes its local frequency, never the OTF.
 
 use super::render::Optics;
+use crate::distortion::Lens;
 use crate::geometry::{Homography, Point};
 use crate::target::{Direction, Rect, Target};
 use serde::Serialize;
@@ -65,7 +70,25 @@ pub struct PatchTruth {
 
 /// The image frequency vector (cy/px, x right, y down) of a chart phase gradient `g` (cy/mm) at chart point `p`.
 pub fn image_freq(h: &Homography, p: Point, g: [f64; 2]) -> [f64; 2] {
-    let j = h.jacobian(p);
+    image_freq_lens(h, None, p, g)
+}
+
+/// As [`image_freq`], in the photo of a lens with distortion `lens` (chart → H → undistorted → photo).
+pub fn image_freq_lens(h: &Homography, lens: Option<&Lens>, p: Point, g: [f64; 2]) -> [f64; 2] {
+    let mut j = h.jacobian(p);
+    if let Some(l) = lens {
+        let d = l.jacobian(h.apply(p));
+        j = [
+            [
+                d[0][0] * j[0][0] + d[0][1] * j[1][0],
+                d[0][0] * j[0][1] + d[0][1] * j[1][1],
+            ],
+            [
+                d[1][0] * j[0][0] + d[1][1] * j[1][0],
+                d[1][0] * j[0][1] + d[1][1] * j[1][1],
+            ],
+        ];
+    }
     let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
     [
         (j[1][1] * g[0] - j[1][0] * g[1]) / det,
@@ -90,13 +113,25 @@ fn strip_corners(r: &Rect, dir: Direction) -> [Point; 4] {
 
 /// The corners of a chart quadrilateral mapped to image pixels, flattened.
 pub fn quad_px(h: &Homography, q: [Point; 4]) -> [f64; 8] {
-    flat(q.map(|p| h.apply(p)))
+    quad_px_lens(h, None, q)
+}
+
+/// Where a chart point lands in the photo: the homography, then the lens's distortion.
+pub fn photo_point(h: &Homography, lens: Option<&Lens>, p: Point) -> Point {
+    let q = h.apply(p);
+    lens.map_or(q, |l| l.distort(q))
+}
+
+/// The corners of a chart quadrilateral where they land in the photo, flattened.
+pub fn quad_px_lens(h: &Homography, lens: Option<&Lens>, q: [Point; 4]) -> [f64; 8] {
+    flat(q.map(|p| photo_point(h, lens, p)))
 }
 
 /// Truth curves of every sweep in `target` and truths of every sine patch.
 pub fn truths(
     target: &Target,
     h: &Homography,
+    lens: Option<&Lens>,
     optics: &Optics,
 ) -> (Vec<SweepTruth>, Vec<PatchTruth>) {
     let pitch = optics.pitch_mm;
@@ -117,8 +152,8 @@ pub fn truths(
                         Direction::X => ([r.x_mm + s, r.y_mm + r.height_mm / 2.0], [f, 0.0]),
                         Direction::Y => ([r.x_mm + r.width_mm / 2.0, r.y_mm + s], [0.0, f]),
                     };
-                    let k = image_freq(h, p, g);
-                    let q = h.apply(p);
+                    let k = image_freq_lens(h, lens, p, g);
+                    let q = photo_point(h, lens, p);
                     let fpx = k[0].hypot(k[1]);
                     TruthRow {
                         freq_cy_px: fpx,
@@ -133,7 +168,7 @@ pub fn truths(
                 .collect();
             SweepTruth {
                 id: sw.id.clone(),
-                roi: quad_px(h, strip_corners(&r, sw.direction)),
+                roi: quad_px_lens(h, lens, strip_corners(&r, sw.direction)),
                 chart_contrast: sw.contrast,
                 rows,
             }
@@ -149,11 +184,11 @@ pub fn truths(
                 Direction::X => [p.freq_cy_mm, 0.0],
                 Direction::Y => [0.0, p.freq_cy_mm],
             };
-            let k = image_freq(h, c, g);
+            let k = image_freq_lens(h, lens, c, g);
             let mtf = optics.otf_cy_px(k[0], k[1]).norm();
             PatchTruth {
                 id: p.id.clone(),
-                corners: quad_px(h, r.corners()),
+                corners: quad_px_lens(h, lens, r.corners()),
                 freq_vec_cy_px: k,
                 freq_cy_px: k[0].hypot(k[1]),
                 mtf,

@@ -86,7 +86,7 @@ fn killed_run_leaves_only_complete_shots_and_rerun_finishes() {
         let mut child = Command::new(std::env::current_exe().unwrap())
             .args([
                 "--exact",
-                "killed_run_leaves_only_complete_shots_and_rerun_finishes",
+                "batch_resume::killed_run_leaves_only_complete_shots_and_rerun_finishes",
                 "--test-threads=1",
             ])
             .env(CHILD_ENV, d.path())

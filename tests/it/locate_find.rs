@@ -168,7 +168,7 @@ fn random_poses_small_sweep() {
     assert!(rms <= 0.5, "corner RMS {rms}");
 }
 
-/// The full bar: 200 shots (run with `cargo test --release --test locate_find -- --ignored --nocapture`).
+/// The full bar: 200 shots (run with `cargo test --release --test it -- --ignored locate_find:: --nocapture`).
 #[test]
 #[ignore]
 fn random_poses_200_shots() {

@@ -1,5 +1,5 @@
 //! Stage timings of the search on a 24 MP frame (documented release run, not a
-//! bar: `cargo test --release --test locate_timing -- --ignored --nocapture`).
+//! bar: `cargo test --release --test it -- --ignored locate_timing:: --nocapture`).
 
 use crate::locate_support;
 

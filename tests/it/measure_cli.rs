@@ -27,6 +27,7 @@ fn shot(mean: f64, contrast: f64) -> SynthShot {
         sigma_px: 0.7,
         noise: None,
         jpeg_quality: None,
+        nuisance: Default::default(),
     }
 }
 

@@ -187,13 +187,14 @@ fn jpeg_with_damaged_scan_data_is_not_measured_silently() {
     std::fs::create_dir(&shots).unwrap();
     std::fs::rename(&photo, shots.join("damaged.jpg")).unwrap();
     let out = d.path().join("out");
-    sweepmtf()
+    let _ = sweepmtf()
         .arg("batch")
         .arg(&shots)
         .arg("-o")
         .arg(&out)
         .args(["--target", "targets/a4_log.toml", "-q"])
-        .assert();
+        .output()
+        .unwrap();
     let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
     let row = summary.lines().find(|l| l.contains("damaged.jpg")).unwrap();
     assert!(row.contains("scan data"), "{summary}");

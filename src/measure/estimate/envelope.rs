@@ -79,12 +79,15 @@ impl Estimator for Envelope {
                     return None;
                 }
                 let cnt = (ib - ia + 1) as f64;
-                let e: f64 = env[ia..=ib].iter().sum::<f64>() / cnt;
-                let e2: f64 = env[ia..=ib].iter().map(|x| x * x).sum::<f64>() / cnt;
-                let mu: f64 = mean[ia..=ib].iter().sum::<f64>() / cnt;
-                if mu <= 0.0 {
+                // The envelope relative to the local mean sample by sample, so that
+                // uneven light (gradient, vignetting) cancels within the window.
+                if mean[ia..=ib].iter().any(|&m| m <= 0.0) {
                     return None;
                 }
+                let rel = || env[ia..=ib].iter().zip(&mean[ia..=ib]).map(|(e, m)| e / m);
+                let e: f64 = rel().sum::<f64>() / cnt;
+                let e2: f64 = rel().map(|x| x * x).sum::<f64>() / cnt;
+                let mu = 1.0;
                 let att = bin_attenuation(law.freq(s), avg_var);
                 // Independent envelope samples in the window ≈ its cycles.
                 let sd = (e2 - e * e).max(0.0).sqrt() / self.window_cycles.max(1.0).sqrt();

@@ -1,7 +1,10 @@
 //! The paper's method: local maxima and minima of the profile, one per half
 //! period, located to sub-bin precision by a least-squares parabola through
 //! the bins around each extremum, and M = (Amax − Amin)/(Amax + Amin) for each
-//! adjacent max/min pair.
+//! adjacent max/min pair. Each extremum is first divided by the local mean (the
+//! count-weighted mean of the bins within one period around it), so that uneven
+//! light (a gradient or vignetting, which differ between a maximum and its
+//! neighbouring minimum) does not bias the modulation.
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
@@ -97,13 +100,63 @@ impl Estimator for Extrema {
         let peaks: Vec<Option<Peak>> = (first..=last)
             .map(|j| locate(prof, &phases, j as f64 / 2.0, j.rem_euclid(2) == 0))
             .collect();
+        // Prefix sums of count·y and count, for one-period local means.
+        let mut cy = vec![0.0f64; prof.s.len() + 1];
+        let mut cn = vec![0.0f64; prof.s.len() + 1];
+        for k in 0..prof.s.len() {
+            cy[k + 1] = cy[k] + prof.count[k] * prof.y[k];
+            cn[k + 1] = cn[k] + prof.count[k];
+        }
+        // Bin k spans the phases between the midpoints to its neighbours; the
+        // sums are interpolated linearly inside a bin, so a window of exactly
+        // one period takes fractions of its end bins (a whole-bin window is
+        // biased by up to a bin's share of an extremum).
+        let nb = phases.len();
+        let edge = |k: usize| -> f64 {
+            if k == 0 {
+                phases[0] - 0.5 * (phases[1] - phases[0])
+            } else if k == nb {
+                phases[nb - 1] + 0.5 * (phases[nb - 1] - phases[nb - 2])
+            } else {
+                0.5 * (phases[k - 1] + phases[k])
+            }
+        };
+        let cum = |q: f64, c: &[f64]| -> f64 {
+            // The last edge at or below q.
+            let k = phases.partition_point(|&x| x < q).clamp(1, nb) - 1;
+            let k = if edge(k + 1) <= q { k + 1 } else { k };
+            let k = k.min(nb - 1);
+            let (e0, e1) = (edge(k), edge(k + 1));
+            let t = ((q - e0) / (e1 - e0)).clamp(0.0, 1.0);
+            c[k] + t * (c[k + 1] - c[k])
+        };
+        let local_mean = |s: f64| -> Option<f64> {
+            let p = law.phase(s);
+            // A full period must lie inside the strip.
+            if !(p - 0.5 >= p_lo && p + 0.5 <= p_hi) {
+                return None;
+            }
+            let n = cum(p + 0.5, &cn) - cum(p - 0.5, &cn);
+            (n > 0.0).then(|| (cum(p + 0.5, &cy) - cum(p - 0.5, &cy)) / n)
+        };
         let mut out = Vec::new();
         for (i, w) in peaks.windows(2).enumerate() {
             let (Some(p), Some(q)) = (w[0], w[1]) else {
                 continue;
             };
             let j = first + i as i64;
-            let (mx, mn) = if j.rem_euclid(2) == 0 { (p, q) } else { (q, p) };
+            let (mut mx, mut mn) = if j.rem_euclid(2) == 0 { (p, q) } else { (q, p) };
+            // Relative to the local mean at each extremum: uneven light cancels.
+            let (Some(mu_x), Some(mu_n)) = (local_mean(mx.s), local_mean(mn.s)) else {
+                continue;
+            };
+            if !(mu_x > 0.0 && mu_n > 0.0) {
+                continue;
+            }
+            mx.value /= mu_x;
+            mx.var /= mu_x * mu_x;
+            mn.value /= mu_n;
+            mn.var /= mu_n * mu_n;
             let sum = mx.value + mn.value;
             if sum <= 0.0 || mx.value <= mn.value {
                 continue;

@@ -1,0 +1,165 @@
+"""sweepmtf.measure: paths and arrays against the CLI, the array kinds, the outputs."""
+
+import csv
+import io
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import sweepmtf
+from conftest import SHOT, TARGET
+
+
+@pytest.fixture(scope="module")
+def cli_run(cli, tmp_path_factory):
+    """The CLI's outputs for the README sample (computed once)."""
+    out = tmp_path_factory.mktemp("cli")
+    subprocess.run(
+        [cli, "measure", str(SHOT), "--target", str(TARGET), "-o", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    summary = json.loads((out / "a4_log_shot.summary.json").read_text())
+    return out, summary
+
+
+def close(a, b, tol=1e-12):
+    if a is None or b is None:
+        return a is None and b is None
+    return abs(a - b) <= tol * max(1.0, abs(b))
+
+
+def assert_summary_matches(py_summary, cli_summary, tol=1e-12):
+    assert len(py_summary["curves"]) == len(cli_summary["curves"]) > 0
+    for p, c in zip(py_summary["curves"], cli_summary["curves"]):
+        assert (p["channel"], p["sweep"]) == (c["channel"], c["sweep"])
+        for k in ("chart_modulation", "aliasing_from_cy_px", "clipped_fraction", "mtf_at_nyquist"):
+            assert close(p[k], c[k], tol), (k, p[k], c[k])
+        for k in ("mtf50", "mtf30", "mtf10"):
+            pv, cv = p[k], c[k]
+            assert (pv is None) == (cv is None), k
+            if pv is not None:
+                assert close(pv["cy_px"], cv["cy_px"], tol), (k, pv, cv)
+        for k in ("phase_c0_cycles", "freq_start_cy_per_unit", "c2"):
+            assert close(p["sweep_law"][k], c["sweep_law"][k], tol), k
+        assert p["points"] == c["points"]
+    for k, v in enumerate(cli_summary["roi_px"]):
+        assert np.allclose(py_summary["roi_px"][k], v, rtol=0, atol=1e-12)
+
+
+def test_path_gives_the_cli_result(cli_run):
+    out, cli_summary = cli_run
+    m = sweepmtf.measure(SHOT, target=TARGET)
+    assert_summary_matches(m.summary, cli_summary)
+    # The same CSV, byte for byte.
+    assert m.csv_bytes() == (out / "a4_log_shot.mtf.csv").read_bytes()
+    # The curve's figures are the summary's.
+    c0 = m.curves[0]
+    assert close(c0.mtf50, cli_summary["curves"][0]["mtf50"]["cy_px"])
+    assert m.warnings == cli_summary["warnings"]
+
+
+def test_array_gives_the_path_result(cli_run):
+    _, cli_summary = cli_run
+    arr = sweepmtf.read_photo(SHOT)
+    assert arr.dtype == np.uint8 and arr.ndim in (2, 3)
+    m = sweepmtf.measure(arr, target=TARGET, name=str(SHOT))
+    assert_summary_matches(m.summary, cli_summary)
+    p = sweepmtf.measure(SHOT, target=TARGET)
+    for a, b in zip(m.curves, p.curves):
+        np.testing.assert_allclose(a.freq_cy_px, b.freq_cy_px, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(a.mtf, b.mtf, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(a.mtf_err, b.mtf_err, rtol=1e-12, atol=1e-15)
+        np.testing.assert_array_equal(a.aliased, b.aliased)
+    # A view that is not C-contiguous (every column, reversed twice) is accepted.
+    view = arr[:, ::-1][:, ::-1]
+    assert not view.flags["C_CONTIGUOUS"] or view.base is not None
+    v = sweepmtf.measure(view, target=TARGET)
+    np.testing.assert_allclose(v.curves[0].mtf, p.curves[0].mtf, rtol=1e-12, atol=1e-15)
+
+
+def test_roi_given_and_pitch_units(cli, tmp_path):
+    """An explicit roi without a target, and a pixel pitch in µm: the CLI's numbers."""
+    found = sweepmtf.locate(SHOT, TARGET)
+    corners = found[0]["corners_px"]
+    roi_text = ",".join(f"{v!r}" for xy in corners for v in xy)
+    subprocess.run(
+        [cli, "measure", str(SHOT), "--target", str(TARGET), "--roi", roi_text,
+         "--pixel-pitch", "4.3um", "--method", "envelope", "-o", str(tmp_path)],
+        check=True, capture_output=True,
+    )
+    cli_summary = json.loads((tmp_path / "a4_log_shot.summary.json").read_text())
+    m = sweepmtf.measure(SHOT, roi=corners, target=TARGET, pixel_pitch_um=4.3, method="envelope")
+    assert_summary_matches(m.summary, cli_summary)
+    assert abs(m.pixel_pitch_mm - 0.0043) < 1e-15
+    np.testing.assert_allclose(m.curves[0].freq_cy_mm, m.curves[0].freq_cy_px / 0.0043)
+    assert (tmp_path / "a4_log_shot.mtf.csv").read_bytes() == m.csv_bytes()
+
+
+def grey_strip(dtype, gamma=1.0):
+    """A synthetic linear sweep strip (known modulation 0.6 at low frequency) as code values."""
+    h, w = 120, 900
+    x = np.arange(w) + 0.5
+    f = 0.02 + (0.35 - 0.02) * x / w  # cycles/pixel, linear sweep
+    phase = np.cumsum(f)
+    row = 0.5 + 0.3 * np.sin(2 * np.pi * phase)
+    lin = np.tile(row, (h, 1))
+    code = lin ** (1.0 / gamma)
+    if dtype == np.uint16:
+        return np.round(code * 65535).astype(np.uint16)
+    if dtype == np.uint8:
+        return np.round(code * 255).astype(np.uint8)
+    return code.astype(dtype)
+
+
+STRIP_ROI = [(0, 10), (900, 10), (900, 110), (0, 110)]
+
+
+def test_array_kinds_agree():
+    """uint16, float32, float64 and RGB arrays of the same picture give the same curve."""
+    u16 = grey_strip(np.uint16)
+    base = sweepmtf.measure(u16, roi=STRIP_ROI, refine_roi=False)
+    assert any("taken as linear" in w for w in base.warnings)
+    c = base.curves[0]
+    # Low frequencies of a perfect (unblurred) sweep: MTF ≈ 1 against the
+    # estimated chart modulation; the measured modulation is the drawn 0.6.
+    low = c.freq_cy_px < 0.08
+    assert np.all(np.abs(c.modulation[low] - 0.6) < 0.01), c.modulation[low]
+    f32 = (u16 / 65535.0).astype(np.float32)
+    for arr in (f32, f32.astype(np.float64), np.dstack([f32, f32, f32])):
+        m = sweepmtf.measure(arr, roi=STRIP_ROI, refine_roi=False)
+        np.testing.assert_allclose(m.curves[0].freq_cy_px, c.freq_cy_px, rtol=1e-9)
+        np.testing.assert_allclose(m.curves[0].mtf, c.mtf, rtol=0, atol=1e-5)
+    # tone: a gamma-encoded float picture, decoded by tone=2.2, is the linear one.
+    g = grey_strip(np.float32, gamma=2.2)
+    m = sweepmtf.measure(g, roi=STRIP_ROI, refine_roi=False, tone=2.2)
+    np.testing.assert_allclose(m.curves[0].mtf, c.mtf, rtol=0, atol=2e-3)
+    wrong = sweepmtf.measure(g, roi=STRIP_ROI, refine_roi=False, tone="linear")
+    assert np.max(np.abs(wrong.curves[0].modulation[low] - 0.6)) > 0.02
+
+
+def test_outputs(tmp_path):
+    m = sweepmtf.measure(SHOT, target=TARGET)
+    m.to_csv(tmp_path / "a.csv")
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "a.csv").read_text())))
+    assert len(rows) == len(m.curves[0].mtf) * len(m.curves)
+    m.plot(tmp_path / "a.png")
+    assert (tmp_path / "a.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    m.plot(tmp_path / "a.svg")
+    assert b"<svg" in (tmp_path / "a.svg").read_bytes()[:200]
+    with pytest.raises(ValueError):
+        m.plot(tmp_path / "a.gif")
+    assert not (tmp_path / "a.gif").exists()
+    assert m.summary["image_width_px"] > 0
+    assert "MTF50" in repr(m)
+
+
+def test_to_pandas():
+    pd = pytest.importorskip("pandas")
+    m = sweepmtf.measure(SHOT, target=TARGET)
+    df = m.to_pandas()
+    assert isinstance(df, pd.DataFrame)
+    assert len(df) == sum(len(c.mtf) for c in m.curves)
+    np.testing.assert_array_equal(df["mtf"].to_numpy()[: len(m.curves[0].mtf)], m.curves[0].mtf)

@@ -1,0 +1,281 @@
+//! Frame: from a decoded photo or a raw frame, with its region known, to the
+//! linear planes that binning reads (only the read set is converted; the tone
+//! chosen in [`super::tone`]; raw greens balanced), then [`super::measure_planes`],
+//! with the source, bit depth, tone line, pixel pitch, preview and warnings
+//! filled in. Also the photo's decoding with its pixel pitch resolved.
+
+use super::preview::{make_preview, raw_preview};
+use super::region::{bbox_crop, read_set};
+use super::tone::photo_tone;
+use super::{
+    DISTORTION_PAD_PX, Failure, MeasureError, MeasureOptions, Measurement, Said, given_distortion,
+    measure_planes_lens, resolve_distortion,
+};
+use crate::geometry::Point;
+use crate::photo::Plane;
+use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
+use crate::photo::jpeg::JpegWant;
+use crate::photo::linearise::{Channel, Crop, plane_names, planes, planes_within};
+use crate::target::Target;
+use std::path::Path;
+
+/// Reads and decodes a photo (not a raw), and resolves its pixel pitch from
+/// EXIF and the options: the photo, the options with the pitch, and the
+/// messages of decoding (damaged scan data) and of the pitch.
+pub(super) fn decode_with_pitch(
+    path: &Path,
+    name: &str,
+    opts: &MeasureOptions,
+) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
+    let name = name.to_string();
+    let bytes = std::fs::read(path).map_err(|source| MeasureError {
+        path: name.clone(),
+        failure: DecodeError::Io {
+            path: name.clone(),
+            source,
+        }
+        .into(),
+    })?;
+    let dec = decode_bytes_want(&bytes, &name, jpeg_want(opts)).map_err(|e| MeasureError {
+        path: name.clone(),
+        failure: e.into(),
+    })?;
+    let facts = crate::photo::exif::facts_from_bytes(&bytes);
+    let damage = crate::photo::jpeg_check::scan_damage(&bytes);
+    drop(bytes);
+    let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
+    let o = MeasureOptions {
+        pixel_pitch_mm: pitch.pitch_mm,
+        ..opts.clone()
+    };
+    let mut warnings = dec.warnings.clone();
+    if let Some(d) = damage {
+        warnings.push(format!(
+            "damaged JPEG scan data ({d}): the picture may be partly grey"
+        ));
+    }
+    warnings.extend(pitch.warnings);
+    Ok((
+        dec,
+        o,
+        Said {
+            warnings,
+            notes: pitch.notes,
+        },
+    ))
+}
+
+/// Rows below the region's lowest corner that a measurement may still read
+/// (corner refinement's search and crop, the binned rows' padding), px.
+const ROWS_BELOW_ROI: f64 = 64.0;
+
+/// What of a JPEG the measurement reads: with corners given, the rows down
+/// to just below the region; for a luminance measurement without a tone
+/// curve from the chart, the luma plane alone (see `photo::jpeg`).
+fn jpeg_want(opts: &MeasureOptions) -> JpegWant {
+    JpegWant {
+        rows: opts.roi.map(|q| {
+            let ymax = q.iter().map(|p| p[1]).fold(0.0, f64::max);
+            (ymax + ROWS_BELOW_ROI).ceil().max(0.0) as usize
+        }),
+        luma_only: opts.channel == Channel::Luma && !opts.tone_chart,
+    }
+}
+
+/// The part of [`measure_raw`] after the region is known: `roi` (frame px)
+/// and the warnings so far.
+pub(super) fn measure_frame_at(
+    frame: &crate::photo::raw::RawFrame,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    mut said: Said,
+) -> Result<Measurement, MeasureError> {
+    use crate::photo::raw::RawChannel;
+    let warnings = &mut said.warnings;
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    let roi = *roi;
+    if let Some(o) = frame.facts.orientation.filter(|&o| o != 1) {
+        warnings.push(format!(
+            "raw file with EXIF orientation {o}: region and plots are in the stored sensor frame ({}×{} px, not turned)",
+            frame.width, frame.height
+        ));
+    }
+    let rc = match opts.channel {
+        Channel::Luma => {
+            warnings.push(
+                "raw file: measuring the green sites (luminance would need demosaicing); \
+                 use --channel r, g, b or all to choose"
+                    .to_string(),
+            );
+            RawChannel::G
+        }
+        Channel::R => RawChannel::R,
+        Channel::G => RawChannel::G,
+        Channel::B => RawChannel::B,
+        Channel::All => RawChannel::All,
+    };
+    if opts.gamma.is_some() || opts.tone_chart {
+        warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
+    }
+    // Only what binning reads is converted to f32.
+    let distortion = given_distortion(opts, &roi, frame.width, frame.height).map_err(err)?;
+    let lens = distortion.and_then(|d| d.lens(frame.width, frame.height));
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        frame.width,
+        frame.height,
+    )
+    .map_err(err)?;
+    let mut groups = frame.channel_groups_within(rc, (crop.x0, crop.y0, crop.x1, crop.y1), &span);
+    let (greens, green_gain) = if opts.green_balance {
+        balance_green_group(frame, &mut groups, RAW_CLIP)
+    } else {
+        (
+            "; greens as recorded (--no-green-balance)".to_string(),
+            None,
+        )
+    };
+    let pitch =
+        crate::photo::pitch::resolve(&frame.facts, frame.width, frame.height, opts.pixel_pitch_mm);
+    let o = MeasureOptions {
+        pixel_pitch_mm: pitch.pitch_mm,
+        ..opts.clone()
+    };
+    let mut m = measure_planes_lens(
+        &groups,
+        (frame.width, frame.height),
+        &roi,
+        target,
+        &o,
+        RAW_CLIP,
+        distortion,
+    )
+    .map_err(err)?;
+    drop(groups);
+    m.preview = raw_preview(frame, &roi);
+    m.source = name.to_string();
+    m.bits = frame.bits_per_sample as u32;
+    m.tone = format!("linear raw (black level removed, white level = 1{greens})");
+    m.green_gain = green_gain;
+    said.warnings.extend(pitch.warnings);
+    said.notes.extend(pitch.notes);
+    said.put_before(&mut m);
+    Ok(m)
+}
+
+/// Linear raw level at and above which a sample counts as clipped (white = 1).
+const RAW_CLIP: f32 = 0.9999;
+
+/// Brings the second green lattice of a Bayer mosaic's green group to the
+/// first's level ([`crate::photo::raw::balance_greens`]); returns what the
+/// summary's tone line says about it ("" when nothing was balanced) and the gain.
+fn balance_green_group(
+    frame: &crate::photo::raw::RawFrame,
+    groups: &mut [(&'static str, Vec<Plane>)],
+    clip: f32,
+) -> (String, Option<f64>) {
+    let (Some(cfa), Some((_, planes))) = (&frame.cfa, groups.iter_mut().find(|g| g.0 == "g"))
+    else {
+        return (String::new(), None);
+    };
+    let [first, second] = planes.as_mut_slice() else {
+        return (String::new(), None);
+    };
+    let Some(b) = crate::photo::raw::balance_greens(first, second, clip) else {
+        return (String::new(), None);
+    };
+    let (w, h) = cfa.size();
+    let name = |p: &Plane| crate::photo::raw::green_name(cfa, (p.offset.0 % w, p.offset.1 % h));
+    let line = format!(
+        "; {} × {:.4} to {}'s level, from {} sites",
+        name(second),
+        b.gain,
+        name(first),
+        b.sites
+    );
+    (line, Some(b.gain))
+}
+
+/// The part of [`measure_decoded`] after the region is known: `roi` (image
+/// px), the refinement's luminance plane `seen` (reused when it holds what
+/// the measurement reads) and the warnings so far.
+pub(super) fn measure_decoded_at(
+    dec: &Decoded,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+    roi: &[Point; 4],
+    seen: Option<(Crop, Plane)>,
+    mut said: Said,
+) -> Result<Measurement, MeasureError> {
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    let roi = *roi;
+    // Crop: the region's bounding box (+2 px).
+    let crop = bbox_crop(&roi, dec.width, dec.height, 2.0);
+    let (tone, tone_desc) =
+        photo_tone(dec, target, opts, crop, &roi, &mut said.notes).map_err(err)?;
+    let clip_level = (tone.apply(1.0) * 0.999) as f32;
+    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
+        let c = bbox_crop(&roi, dec.width, dec.height, DISTORTION_PAD_PX);
+        planes(dec, c, &tone, Channel::Luma).swap_remove(0)
+    })
+    .map_err(err)?;
+    let lens = distortion.and_then(|d| d.lens(dec.width, dec.height));
+    // Convert only what binning reads.
+    let (crop, span) = read_set(
+        &roi,
+        target,
+        opts.margin,
+        lens.as_ref(),
+        dec.width,
+        dec.height,
+    )
+    .map_err(err)?;
+    // The refinement's plane already holds these samples when the measurement
+    // wants default-tone luminance (or the photo is grey) inside its crop.
+    let same_samples = !opts.tone_chart
+        && opts.gamma.is_none()
+        && (opts.channel == Channel::Luma || dec.channels == 1);
+    let reuse = seen.filter(|(c, _)| {
+        same_samples && c.x0 <= crop.x0 && c.y0 <= crop.y0 && c.x1 >= crop.x1 && c.y1 >= crop.y1
+    });
+    let (ps, preview) = match reuse {
+        Some((_, plane)) => (vec![plane], make_preview(dec, &roi)),
+        None => rayon::join(
+            || planes_within(dec, crop, &tone, opts.channel, &span),
+            || make_preview(dec, &roi),
+        ),
+    };
+    let names = plane_names(opts.channel, dec.channels);
+    let groups: Vec<(&str, Vec<Plane>)> = names
+        .into_iter()
+        .zip(ps.into_iter().map(|p| vec![p]))
+        .collect();
+    let mut m = measure_planes_lens(
+        &groups,
+        (dec.width, dec.height),
+        &roi,
+        target,
+        opts,
+        clip_level,
+        distortion,
+    )
+    .map_err(err)?;
+    m.source = name.to_string();
+    m.bits = dec.bits();
+    m.tone = tone_desc;
+    m.preview = preview;
+    said.put_before(&mut m);
+    Ok(m)
+}

@@ -1,0 +1,156 @@
+//! Frequency law along a strip: the starting law refined from local sine
+//! fits over the well-resolved part, the output grid of positions it is
+//! sampled at, and the local-frequency check (the image's own frequency
+//! against the law) that flags aliasing.
+
+use super::estimate::fit::{PhaseTable, local_fit};
+use super::law::{self, PhaseLaw};
+use super::profile::Profile;
+use rayon::prelude::*;
+
+/// Refines a phase law from local sine fits over the well-resolved part of the
+/// strip (contiguous from the low-frequency end, signal-to-noise ≥ 8, below
+/// 0.85 of the band limit). Returns the law, its RMS phase residual (cycles)
+/// and the number of fits that support it.
+pub(super) fn refine_law(
+    prof: &Profile,
+    start: PhaseLaw,
+    s_per_px: &impl Fn(f64) -> f64,
+    band_limit: &impl Fn(f64) -> f64,
+) -> Option<(PhaseLaw, f64, usize)> {
+    let mut law = start;
+    let (s_lo, s_hi) = (prof.s[0], prof.s[prof.s.len() - 1]);
+    let mut result = None;
+    for _ in 0..3 {
+        if !(law.freq(s_lo).is_finite() && law.freq(s_lo) > 0.0) {
+            return result;
+        }
+        let table = PhaseTable::new(prof, &law);
+        // One fit per cycle up to 0.85 of the band limit, computed in parallel,
+        // then accepted in order while the phase shift stays continuous.
+        let (p_lo, p_hi) = (law.phase(s_lo), law.phase(s_hi));
+        let mut at = Vec::new();
+        let mut p = p_lo + 1.5;
+        while p < p_hi - 1.5 {
+            let s = law.s_at_phase(p, s_lo, s_hi);
+            if law.freq(s) * s_per_px(s) > 0.85 * band_limit(s) {
+                break;
+            }
+            at.push((p, s));
+            p += 1.0;
+        }
+        let fits: Vec<_> = at
+            .par_iter()
+            .map(|&(p, s)| (p, s, local_fit(prof, &table, &law, s, 2.0)))
+            .collect();
+        let mut pts = Vec::new();
+        let mut prev_shift: Option<f64> = None;
+        for (p, s, fit) in fits {
+            let Some(fit) = fit else {
+                continue;
+            };
+            let snr = fit.amp / fit.amp_var.sqrt().max(1e-12);
+            if snr < 8.0 {
+                if pts.len() >= 8 {
+                    break;
+                }
+                continue;
+            }
+            let mut shift = fit.phase_shift;
+            if let Some(prev) = prev_shift {
+                shift -= (shift - prev).round();
+                if (shift - prev).abs() > 0.2 {
+                    break;
+                }
+            }
+            prev_shift = Some(shift);
+            pts.push((s, p + shift, snr.min(1e3).powi(2)));
+        }
+        if pts.len() < 6 {
+            return result;
+        }
+        let (l, rms) = law::fit_law(&pts, law.kind)?;
+        // Converged when the new law moves no fitted point's phase by 1/1000 cycle.
+        let moved = pts
+            .iter()
+            .map(|&(s, _, _)| (l.phase(s) - law.phase(s)).abs())
+            .fold(0.0, f64::max);
+        law = l;
+        result = Some((law, rms, pts.len()));
+        if moved < 1e-3 {
+            break;
+        }
+    }
+    result
+}
+
+/// Output positions: at least one cycle apart and at most ~1/300 of the frequency range apart.
+pub(super) fn output_grid(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Vec<f64> {
+    let (f_lo, f_hi) = (law.freq(s_lo), law.freq(s_hi));
+    let df = (f_hi - f_lo) / 300.0;
+    let mut out = Vec::new();
+    let mut s = law.s_at_phase(law.phase(s_lo) + 0.5, s_lo, s_hi);
+    let p_end = law.phase(s_hi) - 0.5;
+    while law.phase(s) <= p_end && out.len() < 5000 {
+        out.push(s);
+        let by_cycle = law.s_at_phase(law.phase(s) + 1.0, s_lo, s_hi);
+        let target_f = law.freq(s) + df;
+        // s where the frequency reaches target_f (bisection; frequency rises).
+        let (mut a, mut b) = (s, s_hi);
+        for _ in 0..60 {
+            let m = 0.5 * (a + b);
+            if law.freq(m) < target_f {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        let next = by_cycle.max(0.5 * (a + b));
+        if next <= s + 1e-12 {
+            break;
+        }
+        s = next;
+    }
+    out
+}
+
+/// Relative deviation of the image's local frequency from the law, (s, deviation) at grid points with a clear signal.
+pub(super) fn local_freq_deviation(
+    prof: &Profile,
+    table: &PhaseTable,
+    law: &PhaseLaw,
+    grid: &[f64],
+) -> Vec<(f64, f64)> {
+    let fits: Vec<(f64, f64, f64)> = grid
+        .par_iter()
+        .filter_map(|&s| {
+            let f = local_fit(prof, table, law, s, 2.0)?;
+            let snr = f.amp / f.amp_var.sqrt().max(1e-12);
+            (snr > 15.0).then_some((s, law.phase(s), f.phase_shift))
+        })
+        .collect();
+    // Pair each fit with the next one at least 4 cycles on (phase noise ~1/(2π·SNR) per fit).
+    let mut out = Vec::new();
+    for i in 0..fits.len() {
+        let j = fits[i..].partition_point(|f| f.1 < fits[i].1 + 4.0) + i;
+        if let Some(fj) = fits.get(j)
+            && fj.1 - fits[i].1 < 12.0
+        {
+            let mut d = fj.2 - fits[i].2;
+            d -= d.round();
+            out.push((0.5 * (fits[i].0 + fj.0), d / (fj.1 - fits[i].1)));
+        }
+    }
+    out
+}
+
+/// The local-frequency deviation at the fit nearest to `s` (strip units), if any.
+pub(super) fn dev_at(dev: &[(f64, f64)], s: f64) -> Option<f64> {
+    let i = dev.partition_point(|d| d.0 < s);
+    let cand = [i.checked_sub(1), Some(i)];
+    cand.iter()
+        .flatten()
+        .filter_map(|&k| dev.get(k))
+        .min_by(|a, b| (a.0 - s).abs().total_cmp(&(b.0 - s).abs()))
+        .map(|d| d.1)
+}

@@ -1,0 +1,419 @@
+//! Lens distortion of a shot: the one the user gave (`--distortion`), or one
+//! estimated from the strip's two long printed edges, which are straight on
+//! the chart and so straight again once the photo is undistorted.
+//!
+//! Estimate: along each long edge, at evenly spaced places (the ends left
+//! out), the profile across the edge is read (bilinear, averaged over ±2 px
+//! along the edge) and the edge put where it crosses the mean of the levels
+//! inside and outside (exact for any symmetric blur: inside the strip the
+//! pattern varies along the edge only). A one-parameter radial model (PTLens
+//! b, a = c = 0: the classic cubic r_d = r_u·(1 − b + b·r_u²)) about the image
+//! centre is fitted so that the undistorted points of each edge lie on a line
+//! (least squares of the perpendicular residuals, two rounds with outliers
+//! beyond 4 robust σ dropped). The model is used only when b differs from 0 by
+//! more than 3 σ and it bends the strip's edges by at least
+//! [`MIN_BOW_PX`]; otherwise the shot is measured as without distortion.
+//!
+//! What the edges cannot see: a strip through the image centre has radial
+//! edges, straight under any radial distortion; its local frequency still
+//! follows the distortion (give the lens's model with `--distortion` then).
+
+use crate::distortion::{Lens, MAX_CORNER_PERCENT, Ptlens};
+use crate::geometry::Point;
+use crate::photo::Plane;
+use serde::Serialize;
+
+/// Smallest bow (px) of the strip's edges for which an estimated distortion is used.
+pub const MIN_BOW_PX: f64 = 0.1;
+
+/// Where the distortion used came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DistortionSource {
+    /// Given by the user (`--distortion`).
+    Given,
+    /// Estimated from the strip's long edges and used.
+    Estimated,
+    /// Estimated, but too small or too uncertain to matter: not used.
+    Negligible,
+}
+
+/// The lens distortion of a measurement, as reported in the summary.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DistortionFound {
+    /// The model (PTLens a, b, c; radius 1 = half the image's smaller side).
+    pub model: Ptlens,
+    /// Its distortion at the frame corner, percent (+ pincushion, − barrel).
+    pub corner_percent: f64,
+    /// Where it came from.
+    pub source: DistortionSource,
+    /// Standard uncertainty of the estimated b (None when given).
+    pub b_sigma: Option<f64>,
+    /// RMS distance of the undistorted edge points from their lines, px (None when given).
+    pub edge_rms_px: Option<f64>,
+    /// Edge points the estimate used (0 when given).
+    pub edge_points: usize,
+    /// Largest bow of the strip's long edges in the photo under this model, px.
+    pub bow_px: f64,
+}
+
+impl DistortionFound {
+    /// The model when it is used for the measurement.
+    pub fn used(&self) -> Option<Ptlens> {
+        (self.source != DistortionSource::Negligible).then_some(self.model)
+    }
+
+    /// The lens the measurement bins through in a `width`×`height` px image, when used.
+    pub fn lens(&self, width: usize, height: usize) -> Option<crate::distortion::Lens> {
+        self.used()
+            .map(|m| crate::distortion::Lens::new(m, width, height))
+    }
+
+    /// One line for the notes.
+    pub fn note(&self) -> String {
+        let m = &self.model;
+        match self.source {
+            DistortionSource::Given => format!(
+                "lens distortion as given: {m} ({:+.2} % at the frame corner)",
+                self.corner_percent
+            ),
+            DistortionSource::Estimated => format!(
+                "lens distortion estimated from the strip's edges: ptlens:b={:.5} ± {:.5} ({:+.2} % at the frame corner, edges bowed {:.2} px, {} edge points, RMS {:.3} px); iso-phase lines and frequencies follow it",
+                m.b,
+                self.b_sigma.unwrap_or(0.0),
+                self.corner_percent,
+                self.bow_px,
+                self.edge_points,
+                self.edge_rms_px.unwrap_or(0.0)
+            ),
+            DistortionSource::Negligible => format!(
+                "lens distortion from the strip's edges negligible (b = {:.5} ± {:.5}, edges bowed {:.2} px): none applied",
+                m.b,
+                self.b_sigma.unwrap_or(0.0),
+                self.bow_px
+            ),
+        }
+    }
+}
+
+/// The report for a model the user gave, on a `width`×`height` image whose strip corners are `roi`.
+pub fn given(model: Ptlens, roi: &[Point; 4], width: usize, height: usize) -> DistortionFound {
+    let lens = Lens::new(model, width, height);
+    DistortionFound {
+        model,
+        corner_percent: lens.corner_percent(),
+        source: DistortionSource::Given,
+        b_sigma: None,
+        edge_rms_px: None,
+        edge_points: 0,
+        bow_px: long_edge_bow(&lens, roi),
+    }
+}
+
+/// How far (px) the strip's long edges bow in the photo under `lens`: the
+/// straight chart edges through the undistorted corners, distorted, against
+/// their photo chords.
+pub fn long_edge_bow(lens: &Lens, roi: &[Point; 4]) -> f64 {
+    let mut worst = 0.0f64;
+    for (a, b) in [(roi[0], roi[1]), (roi[3], roi[2])] {
+        let (ua, ub) = (lens.undistort(a), lens.undistort(b));
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]).max(1e-9);
+        for i in 1..32 {
+            let u = i as f64 / 32.0;
+            let p = lens.distort([ua[0] + u * (ub[0] - ua[0]), ua[1] + u * (ub[1] - ua[1])]);
+            let d = ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])) / len;
+            worst = worst.max(d.abs());
+        }
+    }
+    worst
+}
+
+/// Bilinear value of `plane` at photo point (x, y) (pixel centres at +0.5), if inside.
+fn sample(plane: &Plane, x: f64, y: f64) -> Option<f64> {
+    let fx = (x - 0.5 - plane.offset.0 as f64) / plane.step.0 as f64;
+    let fy = (y - 0.5 - plane.offset.1 as f64) / plane.step.1 as f64;
+    if !(fx >= 0.0 && fy >= 0.0) {
+        return None;
+    }
+    let (i, j) = (fx.floor() as usize, fy.floor() as usize);
+    if i + 1 >= plane.width || j + 1 >= plane.height {
+        return None;
+    }
+    let (u, v) = (fx - i as f64, fy - j as f64);
+    let at = |i: usize, j: usize| plane.data[j * plane.width + i] as f64;
+    Some(
+        (1.0 - v) * ((1.0 - u) * at(i, j) + u * at(i + 1, j))
+            + v * ((1.0 - u) * at(i, j + 1) + u * at(i + 1, j + 1)),
+    )
+}
+
+/// Edge points along the long edge from photo corner `a` to `b`, searched
+/// about the curve that `lens` predicts for it (the chord without one);
+/// `towards` is a point inside the strip, `depth_in` how far (px) the strip
+/// reaches inside.
+fn edge_points(
+    plane: &Plane,
+    (a, b): (Point, Point),
+    (oa, ob): (Point, Point),
+    depth_in: f64,
+    lens: Option<&Lens>,
+) -> Vec<Point> {
+    let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+    let on = |a: Point, b: Point, u: f64| -> Point {
+        let (ua, ub) = lens.map_or((a, b), |l| (l.undistort(a), l.undistort(b)));
+        let p = [ua[0] + u * (ub[0] - ua[0]), ua[1] + u * (ub[1] - ua[1])];
+        lens.map_or(p, |l| l.distort(p))
+    };
+    let at = |u: f64| on(a, b, u);
+    let h_in = (0.45 * depth_in).clamp(2.0, 16.0);
+    let h_out = 12.0;
+    let step = 0.25;
+    let n = ((len / 6.0) as usize).clamp(16, 400);
+    let mut out = Vec::new();
+    for k in 0..n {
+        let u = 0.04 + 0.92 * (k as f64 + 0.5) / n as f64;
+        let c = at(u);
+        let (p0, p1) = (at(u - 1e-3), at(u + 1e-3));
+        let tl = (p1[0] - p0[0]).hypot(p1[1] - p0[1]).max(1e-12);
+        let dir = [(p1[0] - p0[0]) / tl, (p1[1] - p0[1]) / tl];
+        let towards = on(oa, ob, u);
+        let mut inward = [-dir[1], dir[0]];
+        if inward[0] * (towards[0] - c[0]) + inward[1] * (towards[1] - c[1]) < 0.0 {
+            inward = [-inward[0], -inward[1]];
+        }
+        // d > 0 outwards.
+        let nd = ((h_in + h_out) / step) as usize + 1;
+        let mut prof = Vec::with_capacity(nd);
+        let mut ok = true;
+        for i in 0..nd {
+            let d = -h_in + i as f64 * step;
+            let mut acc = 0.0;
+            for e in [-2.0, -1.0, 0.0, 1.0, 2.0] {
+                let x = c[0] - d * inward[0] + e * dir[0];
+                let y = c[1] - d * inward[1] + e * dir[1];
+                match sample(plane, x, y) {
+                    Some(v) => acc += v,
+                    None => {
+                        ok = false;
+                        break;
+                    }
+                }
+            }
+            if !ok {
+                break;
+            }
+            prof.push((d, acc / 5.0));
+        }
+        if !ok || prof.len() < 8 {
+            continue;
+        }
+        let q = prof.len() / 4;
+        let inside = prof[..q].iter().map(|p| p.1).sum::<f64>() / q as f64;
+        let outside = prof[prof.len() - q..].iter().map(|p| p.1).sum::<f64>() / q as f64;
+        let step_h = outside - inside;
+        if step_h.abs() < 0.03 * outside.abs().max(inside.abs()).max(1e-6) {
+            continue;
+        }
+        let mid = 0.5 * (inside + outside);
+        // The crossing of the mid level nearest the predicted edge.
+        let mut best: Option<f64> = None;
+        for w in prof.windows(2) {
+            let (g0, g1) = (w[0].1 - mid, w[1].1 - mid);
+            if g0 == 0.0 || g0.signum() != g1.signum() {
+                let d = w[0].0 + (w[1].0 - w[0].0) * g0 / (g0 - g1);
+                if best.is_none_or(|b| d.abs() < b.abs()) {
+                    best = Some(d);
+                }
+            }
+        }
+        if let Some(d) = best
+            && d > -0.8 * h_in
+            && d < 0.8 * h_out
+        {
+            out.push([c[0] - d * inward[0], c[1] - d * inward[1]]);
+        }
+    }
+    out
+}
+
+/// Sum of squared perpendicular residuals of points about their least-squares line.
+fn line_residuals(pts: &[Point]) -> Vec<f64> {
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p[0]).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p[1]).sum::<f64>() / n;
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for p in pts {
+        let (dx, dy) = (p[0] - mx, p[1] - my);
+        sxx += dx * dx;
+        sxy += dx * dy;
+        syy += dy * dy;
+    }
+    // Direction of the principal axis.
+    let th = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let (nx, ny) = (-th.sin(), th.cos());
+    pts.iter()
+        .map(|p| (p[0] - mx) * nx + (p[1] - my) * ny)
+        .collect()
+}
+
+/// Cost of b: the squared residuals of both edges' undistorted points about their lines.
+fn cost(edges: &[Vec<Point>; 2], b: f64, width: usize, height: usize) -> f64 {
+    let lens = Lens::new(Ptlens { a: 0.0, b, c: 0.0 }, width, height);
+    edges
+        .iter()
+        .map(|e| {
+            let u: Vec<Point> = e.iter().map(|&p| lens.undistort(p)).collect();
+            line_residuals(&u).iter().map(|r| r * r).sum::<f64>()
+        })
+        .sum()
+}
+
+/// Minimum of the parabola through the cost at b0 − h, b0, b0 + h: (b, curvature κ, cost there).
+fn parabola(edges: &[Vec<Point>; 2], b0: f64, h: f64, w: usize, ht: usize) -> (f64, f64, f64) {
+    let (cm, c0, cp) = (
+        cost(edges, b0 - h, w, ht),
+        cost(edges, b0, w, ht),
+        cost(edges, b0 + h, w, ht),
+    );
+    let kappa = (cp - 2.0 * c0 + cm) / (2.0 * h * h);
+    if !(kappa > 0.0) {
+        return (b0, kappa, c0);
+    }
+    let b = b0 - (cp - cm) / (4.0 * kappa * h);
+    (b, kappa, c0 - kappa * (b - b0).powi(2))
+}
+
+/// Estimates the distortion from the long edges of the strip with photo corners
+/// `roi` (corners 1→2 and 4→3 are the long edges) in `plane` (luminance, linear;
+/// it must reach ~16 px beyond the strip). `None` when too few edge points are found.
+pub fn estimate(
+    plane: &Plane,
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+) -> Option<DistortionFound> {
+    let mid = |a: Point, b: Point| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    let (m0, m1) = (mid(roi[0], roi[1]), mid(roi[3], roi[2]));
+    let depth = (m1[0] - m0[0]).hypot(m1[1] - m0[1]);
+    let rc2 = (width as f64 / 2.0).hypot(height as f64 / 2.0).powi(2)
+        / (width.min(height) as f64 / 2.0).powi(2);
+    let b_max = MAX_CORNER_PERCENT / 100.0 / (rc2 - 1.0).max(0.05);
+    // Edge points about the chords, then (when the edges bow) again about the
+    // curves a first fit predicts: strong distortion bends an edge far off its chord.
+    let mut lens: Option<Lens> = None;
+    let mut result = None;
+    for _ in 0..3 {
+        let edges = [
+            edge_points(
+                plane,
+                (roi[0], roi[1]),
+                (roi[3], roi[2]),
+                depth,
+                lens.as_ref(),
+            ),
+            edge_points(
+                plane,
+                (roi[3], roi[2]),
+                (roi[0], roi[1]),
+                depth,
+                lens.as_ref(),
+            ),
+        ];
+        let Some(found) = fit_edges(edges, roi, width, height, b_max) else {
+            return result;
+        };
+        let next = Lens::new(found.model, width, height);
+        let bow = found.bow_px;
+        let moved = lens.map_or(bow, |l: Lens| {
+            let nb = Lens::new(
+                Ptlens {
+                    a: 0.0,
+                    b: found.model.b - l.model.b,
+                    c: 0.0,
+                },
+                width,
+                height,
+            );
+            long_edge_bow(&nb, roi)
+        });
+        result = Some(found);
+        if moved < 2.0 {
+            break;
+        }
+        lens = Some(next);
+    }
+    result
+}
+
+/// Fits b to the edge points of both long edges (see the module's text).
+fn fit_edges(
+    mut edges: [Vec<Point>; 2],
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+    b_max: f64,
+) -> Option<DistortionFound> {
+    if edges.iter().any(|e| e.len() < 8) {
+        return None;
+    }
+    let mut fit = (0.0, 0.0, 0.0);
+    for round in 0..2 {
+        let mut b = 0.0;
+        let mut h = 0.004;
+        for _ in 0..3 {
+            let f = parabola(&edges, b, h, width, height);
+            fit = f;
+            b = f.0.clamp(-b_max, b_max);
+            h = (h * 0.25).max(1e-5);
+        }
+        fit.0 = b;
+        if round == 1 {
+            break;
+        }
+        // Drop edge points beyond 4 robust σ of their line, then fit again.
+        let lens = Lens::new(Ptlens { a: 0.0, b, c: 0.0 }, width, height);
+        for e in edges.iter_mut() {
+            let u: Vec<Point> = e.iter().map(|&p| lens.undistort(p)).collect();
+            let r = line_residuals(&u);
+            let mut abs: Vec<f64> = r.iter().map(|v| v.abs()).collect();
+            abs.sort_by(f64::total_cmp);
+            let mad = abs[abs.len() / 2].max(1e-3);
+            let keep: Vec<Point> = e
+                .iter()
+                .zip(&r)
+                .filter(|(_, r)| r.abs() <= 4.0 * 1.4826 * mad)
+                .map(|(p, _)| *p)
+                .collect();
+            *e = keep;
+        }
+        if edges.iter().any(|e| e.len() < 8) {
+            return None;
+        }
+    }
+    let (b, kappa, c_min) = fit;
+    let n: usize = edges.iter().map(|e| e.len()).sum();
+    let dof = (n as f64 - 5.0).max(1.0);
+    let sigma2 = c_min.max(0.0) / dof;
+    let b_sigma = if kappa > 0.0 {
+        (sigma2 / kappa).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    let model = Ptlens { a: 0.0, b, c: 0.0 };
+    let lens = Lens::new(model, width, height);
+    let bow = long_edge_bow(&lens, roi);
+    let used = b.abs() > 3.0 * b_sigma && bow >= MIN_BOW_PX && lens.check().is_ok();
+    Some(DistortionFound {
+        model,
+        corner_percent: lens.corner_percent(),
+        source: if used {
+            DistortionSource::Estimated
+        } else {
+            DistortionSource::Negligible
+        },
+        b_sigma: Some(b_sigma),
+        edge_rms_px: Some(sigma2.sqrt()),
+        edge_points: n,
+        bow_px: bow,
+    })
+}

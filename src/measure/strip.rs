@@ -1,0 +1,248 @@
+//! Strip: one sweep strip of one channel measured — binned along the sweep
+//! ([`super::profile`]), its phase law found from crossings ([`super::law`])
+//! or taken from the target and refined ([`super::frequency`]), modulation
+//! estimated on the output grid ([`super::estimate`]), points flagged where
+//! they alias, and normalised by the chart modulation ([`super::normalise`])
+//! into a [`Curve`].
+
+use super::estimate::fit::PhaseTable;
+use super::frequency::{dev_at, local_freq_deviation, output_grid, refine_law};
+use super::profile::{BinOptions, Strip, bin_planes};
+use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
+use super::{curve, law, normalise};
+use crate::geometry::Point;
+use crate::photo::Plane;
+use rayon::prelude::*;
+
+/// Refuse when more than this fraction of the region is clipped.
+const CLIP_REFUSE: f64 = 0.02;
+
+/// Measures one strip of one plane.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn measure_strip(
+    planes: &[&Plane],
+    channel: &str,
+    id: &str,
+    strip: &Strip,
+    target_law: Option<PhaseLaw>,
+    contrast: Option<f64>,
+    opts: &MeasureOptions,
+    bin_opts: &BinOptions,
+) -> Result<Curve, Failure> {
+    let scale_mid = strip.scale_at(0.5 * strip.length);
+    let len_px = strip.length / scale_mid.s_per_px;
+    let wid_px = strip.width * (1.0 - 2.0 * opts.margin) / scale_mid.s_per_px;
+    if len_px < 20.0 || wid_px < 1.0 {
+        return Err(Failure::TooSmall(format!(
+            "the strip is {len_px:.0}×{wid_px:.1} px inside its margins; it cannot hold 5 cycles"
+        )));
+    }
+    let prof = bin_planes(planes, strip, bin_opts);
+    if prof.s.len() < 20 {
+        return Err(Failure::TooSmall(format!(
+            "only {} bins fall inside the region",
+            prof.s.len()
+        )));
+    }
+    let clipped = prof.clipped_fraction();
+    if clipped > CLIP_REFUSE {
+        return Err(Failure::Clipped {
+            percent: 100.0 * clipped,
+        });
+    }
+    let s_per_px = |s: f64| strip.scale_at(s).s_per_px;
+    let lattice = curve::Lattice::of(planes);
+    // Highest frequency (cy/px) at s that stays inside the lattice's band in the sweep's direction.
+    let band_limit = |s: f64| lattice.band_limit(strip.scale_at(s).angle_rad);
+    let ymax = prof.y.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let ymin = prof.y.iter().cloned().fold(f64::INFINITY, f64::min);
+    if !(ymax > 0.0) || (ymax - ymin) < 1e-4 * ymax.abs().max(1e-6) {
+        return Err(Failure::NoOscillation(format!(
+            "{channel}/{id}: the region is blank (no variation)"
+        )));
+    }
+    // Phase law: from the target (then refined) or from zero crossings.
+    let kind = match (target_law, opts.sweep) {
+        (Some(l), _) => Some(l.kind),
+        (None, SweepChoice::Linear) => Some(LawKind::Linear),
+        (None, SweepChoice::Log) => Some(LawKind::Log),
+        (None, SweepChoice::Auto) => None,
+    };
+    let mut laws: Vec<PhaseLaw> = Vec::new();
+    if let Some(l) = target_law {
+        laws.push(l);
+    } else {
+        let kinds: &[LawKind] = match &kind {
+            Some(k) => std::slice::from_ref(k),
+            None => &[LawKind::Linear, LawKind::Log],
+        };
+        if let Some((found, _)) = law::initial_laws(&prof, kinds, s_per_px, 0.3) {
+            // A family that fits the crossings 4× worse than the best is not refined.
+            let best = found.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
+            laws.extend(
+                found
+                    .into_iter()
+                    .filter(|(_, rms)| *rms <= 4.0 * best.max(1e-3))
+                    .map(|(l, _)| l),
+            );
+        }
+    }
+    if laws.is_empty() {
+        return Err(Failure::NoOscillation(format!(
+            "{channel}/{id}: fewer than 5 regular cycles found along the strip"
+        )));
+    }
+    // Refine each candidate; keep the one explaining the most phase with the least residual.
+    let mut best: Option<(PhaseLaw, f64, usize)> = None;
+    let refined: Vec<_> = laws
+        .par_iter()
+        .filter_map(|&l| refine_law(&prof, l, &s_per_px, &band_limit))
+        .collect();
+    for r in refined {
+        let better = match &best {
+            None => true,
+            Some(b) => r.2 > b.2 + b.2 / 10 || (r.2 + r.2 / 10 >= b.2 && r.1 < b.1),
+        };
+        if better {
+            best = Some(r);
+        }
+    }
+    let Some((law, law_rms, n_resolved)) = best else {
+        return Err(Failure::NoOscillation(format!(
+            "{channel}/{id}: the oscillation is too weak or irregular to follow"
+        )));
+    };
+    // Quality gate: a strip too thin to average across, or a phase law that the
+    // local fits do not follow, gives a curve that only looks confident.
+    if wid_px < super::MIN_ACROSS_PX {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the strip is {wid_px:.1} px across inside its margins; \
+             at least {} px are needed to average the sweep across it",
+            super::MIN_ACROSS_PX
+        )));
+    }
+    if law_rms > super::MAX_LAW_RMS_CYCLES {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the sweep's phase law fits poorly (RMS {law_rms:.3} cycles, \
+             at most {})",
+            super::MAX_LAW_RMS_CYCLES
+        )));
+    }
+    let total_cycles = law.phase(prof.length) - law.phase(0.0);
+    if total_cycles < 5.0 || n_resolved < 5 {
+        return Err(Failure::TooSmall(format!(
+            "{channel}/{id}: the strip holds {total_cycles:.1} cycles; at least 5 are needed"
+        )));
+    }
+    if law.freq(0.0) <= 0.0 || law.freq(prof.length) <= law.freq(0.0) {
+        return Err(Failure::NoOscillation(format!(
+            "{channel}/{id}: the frequency does not rise along the strip (corners 1 and 4 must be on the low-frequency edge)"
+        )));
+    }
+    let grid = output_grid(&law, prof.s[0], prof.s[prof.s.len() - 1]);
+    let est = opts.method.estimator(opts.window_cycles);
+    // The modulation, and beside it the data-based aliasing check (the
+    // image's local frequency versus the law).
+    // Both tabulate the law over the bins: once, shared.
+    let table = PhaseTable::new(&prof, &law);
+    let (mods, dev) = rayon::join(
+        || est.estimate_tabulated(&prof, &law, &table, &grid),
+        || local_freq_deviation(&prof, &table, &law, &grid),
+    );
+    drop(table);
+    let mut points: Vec<MtfPoint> = mods
+        .iter()
+        .map(|m| {
+            let f_chart = law.freq(m.s);
+            let f_px = f_chart * s_per_px(m.s);
+            let d = dev_at(&dev, m.s);
+            MtfPoint {
+                s: m.s,
+                freq_cy_px: f_px,
+                freq_chart: f_chart,
+                modulation: m.modulation,
+                mtf: m.modulation,
+                mtf_err: m.err,
+                aliased: f_px > band_limit(m.s) || d.is_some_and(|d| d.abs() > 0.05),
+            }
+        })
+        .filter(|p| p.modulation.is_finite() && p.freq_cy_px.is_finite())
+        .collect();
+    points.sort_by(|a, b| a.freq_cy_px.total_cmp(&b.freq_cy_px));
+    // Once aliased, everything above is aliased too (a sweep only rises).
+    if let Some(i) = points
+        .iter()
+        .position(|p| p.aliased && p.freq_cy_px > 0.25 * band_limit(p.s))
+    {
+        points[i..].iter_mut().for_each(|p| p.aliased = true);
+    }
+    points
+        .iter_mut()
+        .filter(|p| p.freq_cy_px <= 0.25 * band_limit(p.s))
+        .for_each(|p| p.aliased = false);
+    if points.iter().filter(|p| !p.aliased).count() < 5 {
+        return Err(Failure::NoOscillation(format!(
+            "{channel}/{id}: fewer than 5 usable modulation points"
+        )));
+    }
+    // Leave out the periods whose estimator window runs past the strip's low end.
+    let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
+    let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles + 2.0, s0, s1);
+    let (m_chart, m_chart_err, source) =
+        normalise::chart_modulation(&points, s_min, contrast, channel, id)?;
+    if m_chart_err > super::MAX_CHART_REL_ERR * m_chart {
+        return Err(Failure::Unreliable(format!(
+            "{channel}/{id}: the modulation is lost in noise (chart modulation {m_chart:.3} ± {m_chart_err:.3})"
+        )));
+    }
+    normalise::normalise(&mut points, m_chart, m_chart_err);
+    let mut figures = curve::figures(&points);
+    // A summary figure where the curve is noisier than ±0.05 is not given.
+    let noisy_at = |f: Option<f64>| -> bool {
+        f.is_some_and(|f| {
+            let near: Vec<f64> = points
+                .iter()
+                .filter(|p| !p.aliased && (p.freq_cy_px - f).abs() <= 0.01)
+                .map(|p| p.mtf_err)
+                .collect();
+            !near.is_empty() && near.iter().sum::<f64>() / near.len() as f64 > 0.05
+        })
+    };
+    for fig in [
+        &mut figures.mtf50_cy_px,
+        &mut figures.mtf30_cy_px,
+        &mut figures.mtf10_cy_px,
+    ] {
+        if noisy_at(*fig) {
+            *fig = None;
+        }
+    }
+    let aliasing_from = points.iter().find(|p| p.aliased).map(|p| p.freq_cy_px);
+    let across = |s: f64| -> [Point; 2] {
+        [
+            strip.to_photo([s, opts.margin * strip.width]),
+            strip.to_photo([s, (1.0 - opts.margin) * strip.width]),
+        ]
+    };
+    let alias_line = points.iter().find(|p| p.aliased).map(|p| across(p.s));
+    let (s_first, s_last) = (
+        points.iter().map(|p| p.s).fold(f64::INFINITY, f64::min),
+        points.iter().map(|p| p.s).fold(f64::NEG_INFINITY, f64::max),
+    );
+    Ok(Curve {
+        channel: channel.to_string(),
+        sweep_id: id.to_string(),
+        law,
+        strip_unit: if target_law.is_some() { "mm" } else { "px" },
+        points,
+        chart_modulation: m_chart,
+        chart_modulation_err: m_chart_err,
+        chart_modulation_source: source,
+        figures,
+        aliasing_from_cy_px: aliasing_from,
+        clipped_fraction: clipped,
+        region_px: strip.image_quad(opts.margin * strip.width, (1.0 - opts.margin) * strip.width),
+        alias_line_px: alias_line,
+        measured_lines_px: [across(s_first), across(s_last)],
+    })
+}
