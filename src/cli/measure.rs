@@ -41,6 +41,7 @@ pub fn code_of(f: &Failure) -> Code {
         | Failure::NoOscillation(_)
         | Failure::ModulationUnknown(_)
         | Failure::Unreliable(_) => Code::Measure,
+        Failure::Damaged { .. } => Code::Input,
     }
 }
 

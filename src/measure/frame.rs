@@ -49,7 +49,10 @@ pub(super) fn decode_with_pitch(
         ..opts.clone()
     };
     let mut warnings = dec.warnings.clone();
-    if let Some(d) = damage {
+    // The decoder's own report of damage, else the scan check's (which also
+    // sees damage the lenient decoder passes over, such as stray restart markers).
+    let decoder_saw_it = warnings.iter().any(|w| w.contains(super::DAMAGE_MARK));
+    if let Some(d) = damage.filter(|_| !decoder_saw_it) {
         warnings.push(format!(
             "damaged JPEG scan data ({d}): the picture may be partly grey"
         ));

@@ -187,6 +187,14 @@ pub enum Failure {
     /// bin, a poorly fitting phase law, or modulation lost in noise).
     #[error("curve refused: {0}")]
     Unreliable(String),
+    /// A failure in a photo whose decoder reported damaged data (the likely cause).
+    #[error("{failure} (the photo itself is damaged: {damage})")]
+    Damaged {
+        /// The failure itself.
+        failure: Box<Failure>,
+        /// What the decoder or the scan check found damaged.
+        damage: String,
+    },
 }
 
 /// A failed measurement: the file and the cause, displayed as one line.
@@ -308,12 +316,30 @@ impl Said {
         m.notes = notes;
     }
 
+    /// The failure `e` of a photo these messages say is damaged, with the
+    /// damage named as its likely cause; `e` itself otherwise.
+    pub(crate) fn blame(&self, e: MeasureError) -> MeasureError {
+        match self.warnings.iter().find(|w| w.contains(DAMAGE_MARK)) {
+            Some(w) => MeasureError {
+                path: e.path,
+                failure: Failure::Damaged {
+                    failure: Box::new(e.failure),
+                    damage: w.clone(),
+                },
+            },
+            None => e,
+        }
+    }
+
     /// Adds these messages after the measurement's own.
     pub(crate) fn add_to(self, m: &mut Measurement) {
         m.warnings.extend(self.warnings);
         m.notes.extend(self.notes);
     }
 }
+
+/// The words every damaged-data warning carries (see [`Said::blame`]).
+pub(crate) const DAMAGE_MARK: &str = "scan data";
 
 /// Decodes a photo and measures it.
 pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, MeasureError> {
@@ -326,7 +352,7 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
         return measure_raw(path, &name, target.as_ref(), opts);
     }
     let (dec, o, said) = decode_with_pitch(path, &name, opts)?;
-    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o)?;
+    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o).map_err(|e| said.blame(e))?;
     said.add_to(&mut m);
     Ok(m)
 }
@@ -368,14 +394,15 @@ pub fn measure_file_each(
             .collect();
     }
     let (dec, o, said) = decode_with_pitch(path, &name, opts)?;
-    let charts = located(&full_grey(&dec)[0])?;
+    let charts = located(&full_grey(&dec)[0]).map_err(|e| said.blame(e))?;
     let n = charts.len();
     charts
         .iter()
         .enumerate()
         .map(|(i, c)| {
             let w = found_said(c, i, n);
-            let mut m = measure_decoded_at(&dec, &name, Some(&target), &o, &c.corners_px, None, w)?;
+            let mut m = measure_decoded_at(&dec, &name, Some(&target), &o, &c.corners_px, None, w)
+                .map_err(|e| said.blame(e))?;
             said.clone().add_to(&mut m);
             Ok(name_chart(m, i, n))
         })

@@ -21,9 +21,9 @@ fn stderr(a: &assert_cmd::assert::Assert) -> String {
 
 /// The README sample shot with 2 KB of pseudo-random bytes over the middle
 /// of its scan data (fixed seed; what a bad card or transfer leaves).
-fn damaged_sample(dir: &Path) -> PathBuf {
+fn damaged_sample(dir: &Path, at: f64) -> PathBuf {
     let mut b = std::fs::read(Path::new(ROOT).join("testdata/a4_log_shot.jpg")).unwrap();
-    let mid = b.len() / 2;
+    let mid = (b.len() as f64 * at) as usize;
     let mut x = 0x9E37_79B9u32;
     for v in &mut b[mid..mid + 2048] {
         x ^= x << 13;
@@ -74,7 +74,7 @@ fn model_f_max_1e308_is_refused_at_once_and_leaves_no_partial_csv() {
     ] {
         let a = sweepmtf()
             .args(["model", "--aperture", "rect:A=5um,B=5um", "--cut", "v"])
-            .args(["--f-max", "100", flag, value, "-o"])
+            .args(["--f-max", "100", &format!("{flag}={value}"), "-o"])
             .arg(d.path().join("n.csv"))
             .assert()
             .code(2);
@@ -170,13 +170,32 @@ fn two_batch_runs_into_one_folder_the_second_names_the_holder() {
 #[test]
 fn jpeg_with_damaged_scan_data_is_not_measured_silently() {
     let d = tempfile::tempdir().unwrap();
-    let photo = damaged_sample(d.path());
+    // Damage in the middle of the scan: the chart's lower fiducials are lost,
+    // so location fails, and the failure names the damage as its cause (exit 3).
+    let photo = damaged_sample(d.path(), 0.5);
     let a = sweepmtf()
         .arg("measure")
         .arg(&photo)
         .args(["--target", "targets/a4_log.toml", "-o"])
         .arg(d.path().join("m"))
-        .assert();
+        .assert()
+        .code(3);
+    let err = stderr(&a);
+    assert!(
+        err.contains("damaged.jpg")
+            && err.contains("the photo itself is damaged")
+            && err.contains("scan data"),
+        "{err}"
+    );
+    // Damage near the end (below the chart): measured, exit 0, with a warning.
+    let photo = damaged_sample(d.path(), 0.95);
+    let a = sweepmtf()
+        .arg("measure")
+        .arg(&photo)
+        .args(["--target", "targets/a4_log.toml", "-o"])
+        .arg(d.path().join("m"))
+        .assert()
+        .success();
     let err = stderr(&a);
     assert!(
         err.contains("warning") && err.contains("damaged.jpg") && err.contains("scan data"),
@@ -219,7 +238,10 @@ fn readme_sample_prints_its_summary_line_and_no_warning() {
     };
     let a = run(&[]);
     let out = String::from_utf8_lossy(&a.get_output().stdout).into_owned();
-    assert!(out.starts_with("testdata/a4_log_shot.jpg: MTF50"), "{out}");
+    assert!(
+        out.starts_with("testdata/a4_log_shot.jpg: ") && out.contains("MTF50"),
+        "{out}"
+    );
     assert_eq!(out.lines().count(), 1, "{out}");
     assert_eq!(stderr(&a), "", "nothing on stderr without -v");
     // -v shows the notes; -q stays silent; the JSON keeps them, labelled.
