@@ -41,6 +41,7 @@ pub fn code_of(f: &Failure) -> Code {
         | Failure::NoOscillation(_)
         | Failure::ModulationUnknown(_)
         | Failure::Unreliable(_) => Code::Measure,
+        Failure::Damaged { .. } => Code::Input,
     }
 }
 
@@ -239,7 +240,10 @@ fn write_outputs(
     let o = outputs(m, &a.out, stem, a.flags.plot, prepared, timings)?;
     write_all_atomic(&o.files).map_err(|e| CliError::new(Code::Output, e.to_string()))?;
     for w in &m.warnings {
-        eprintln!("sweepmtf: warning: {name}: {w}");
+        super::messages::warning(&format!("{name}: {w}"));
+    }
+    for n in &m.notes {
+        super::messages::note(&format!("{name}: {n}"));
     }
     if a.json {
         println!("{}", o.summary);

@@ -11,6 +11,7 @@ mod gui;
 pub(crate) mod measure;
 pub(crate) mod measure_flags;
 pub(crate) mod measure_model;
+mod messages;
 mod model;
 mod simulate;
 
@@ -22,6 +23,12 @@ pub use exit::{CliError, Code};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Also print notes (what was done or assumed) on stderr.
+    #[arg(short, long, global = true, conflicts_with = "quiet")]
+    verbose: bool,
+    /// Print only errors on stderr (no warnings, notes or progress).
+    #[arg(short, long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -60,6 +67,7 @@ pub fn main() -> std::process::ExitCode {
             };
         }
     };
+    messages::set_level(cli.quiet, cli.verbose);
     let result = match &cli.command {
         Command::Measure(a) => measure::run(a),
         Command::Chart(a) => chart::run(a),

@@ -311,6 +311,7 @@ pub fn measure(s: &Server, v: Value) -> Reply {
         "curves": serde_json::to_value(&m.curves).unwrap_or(Value::Null),
         "patches": m.patches.len(),
         "warnings": m.warnings,
+        "notes": m.notes,
         "summary": summary(&m, None),
         "command": command(&j.args, &out.display().to_string()),
         "measure_ms": ms,
