@@ -107,7 +107,7 @@ fn measure_and_save_equal_the_cli_with_the_same_corners() {
     assert_eq!(auto["roi"].as_array().unwrap().len(), 4);
     assert!(!auto["curves"].as_array().unwrap().is_empty());
     assert!(
-        auto["warnings"]
+        auto["notes"]
             .as_array()
             .unwrap()
             .iter()

@@ -146,6 +146,7 @@ async function measure(corners) {
       status(`${r.name}: measured in ${r.measure_ms.toFixed(0)} ms (round trip ${ms.toFixed(0)} ms)`);
       $("warnings").innerHTML = "";
       for (const w of r.warnings) { const li = document.createElement("li"); li.textContent = w; $("warnings").appendChild(li); }
+      for (const n of r.notes || []) { const li = document.createElement("li"); li.className = "note"; li.textContent = n; $("warnings").appendChild(li); }
     } catch (e) {
       M.result = null;
       if (!M.corners) defaultCorners();
