@@ -68,11 +68,21 @@ pub(crate) fn tiff_damage<R: Read + Seek>(r: &mut R, len: u64) -> Option<String>
             continue; // past the end: rawler reports it
         }
         let n = u16_at(&n) as usize;
-        let mut entries = vec![0u8; 12 * n + 4];
-        if r.read_exact(&mut entries).is_err() {
-            continue;
-        }
-        for e in entries[..12 * n].chunks_exact(12) {
+        // Entry by entry, as rawler reads them: a directory cut off by the
+        // end of the file still has its first entries parsed.
+        let mut next = None;
+        for i in 0..=n {
+            let mut e = [0u8; 12];
+            let want = if i == n { 4 } else { 12 };
+            if r.seek(SeekFrom::Start(off + 2 + 12 * i as u64)).is_err()
+                || r.read_exact(&mut e[..want]).is_err()
+            {
+                break;
+            }
+            if i == n {
+                next = Some(u32_at(&e[..4]) as u64);
+                break;
+            }
             let (tag, typ, count) = (u16_at(&e[0..]), u16_at(&e[2..]), u32_at(&e[4..]));
             let bytes = count as u64 * type_size(typ);
             if bytes > len {
@@ -81,13 +91,19 @@ pub(crate) fn tiff_damage<R: Read + Seek>(r: &mut R, len: u64) -> Option<String>
                      ({bytes} bytes) in a file of {len} bytes"
                 ));
             }
-            // SubIFDs, EXIF and interoperability directories are followed.
-            let pointer = matches!(tag, 0x014A | 0x8769 | 0xA005) && matches!(typ, 4 | 13);
+            // SubIFDs, EXIF and interoperability directories are followed
+            // whatever type the entry claims (rawler follows most of them).
+            let pointer = matches!(tag, 0x014A | 0x8769 | 0xA005);
             if pointer && depth < MAX_DEPTH {
                 let value = u32_at(&e[8..]) as u64;
-                if count == 1 {
+                if count == 1 || bytes <= 4 {
                     queue.push((value, depth + 1));
-                } else if count > 1 && count <= 64 {
+                } else if count as usize > MAX_IFDS {
+                    return Some(format!(
+                        "TIFF entry 0x{tag:04X} in the directory at byte {off} lists {count} \
+                         directories (at most {MAX_IFDS} are plausible)"
+                    ));
+                } else if matches!(typ, 4 | 13) {
                     let mut list = vec![0u8; 4 * count as usize];
                     if r.seek(SeekFrom::Start(value)).is_ok() && r.read_exact(&mut list).is_ok() {
                         queue.extend(list.chunks_exact(4).map(|p| (u32_at(p) as u64, depth + 1)));
@@ -95,7 +111,9 @@ pub(crate) fn tiff_damage<R: Read + Seek>(r: &mut R, len: u64) -> Option<String>
                 }
             }
         }
-        queue.push((u32_at(&entries[12 * n..]) as u64, depth));
+        if let Some(next) = next {
+            queue.push((next, depth));
+        }
     }
     None
 }
