@@ -65,6 +65,17 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
             },
             None => "MTF50 not reached".to_string(),
         };
+        // With a sharpening peak, MTF50P (half the peak) beside MTF50.
+        let f50p = match (c.figures.sharpening_peak, c.figures.peak_mtf) {
+            (true, Some(pk)) => {
+                let at = c.figures.peak_cy_px.unwrap_or(0.0);
+                match c.figures.mtf50p_cy_px {
+                    Some(f) => format!(", MTF50P {f:.3} cy/px (peak {pk:.3} at {at:.3} cy/px)"),
+                    None => format!(", MTF50P not reached (peak {pk:.3} at {at:.3} cy/px)"),
+                }
+            }
+            _ => String::new(),
+        };
         let nyq = c
             .figures
             .mtf_nyquist
@@ -76,7 +87,7 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
             "from target"
         };
         parts.push(format!(
-            "{tag}{f50}{nyq}, chart modulation {:.3} ({src})",
+            "{tag}{f50}{f50p}{nyq}, chart modulation {:.3} ({src})",
             c.chart_modulation
         ));
     }

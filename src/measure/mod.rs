@@ -22,6 +22,7 @@ use thiserror::Error;
 
 pub mod curve;
 pub mod estimate;
+pub mod figures;
 pub mod in_memory;
 pub mod law;
 pub mod lens_fit;

@@ -36,6 +36,7 @@ mod measure_simulated;
 mod model_apertures;
 mod model_cli;
 mod model_factors;
+mod mtf_peak;
 mod raw_bad_input;
 mod raw_dng;
 mod raw_green_balance;
