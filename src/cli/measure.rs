@@ -212,7 +212,7 @@ fn write_outputs(
         mtf_plot_with(m, a.flags.plot, &extras.plot).map_err(out_err)?,
     ));
     files.push((out("roi.png"), roi_plot::roi_plot(m).map_err(out_err)?));
-    let summary_value = extras.json(summary(m, Some(timings)));
+    let summary_value = extras.json(summary(m, Some(timings)), m);
     let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
     summary_text.push('\n');
     files.push((out("summary.json"), summary_text.into_bytes()));
@@ -223,7 +223,7 @@ fn write_outputs(
     if a.json {
         println!("{summary_value}");
     } else {
-        println!("{}{}", summary_line(m, &csv_path), extras.line_suffix());
+        println!("{}{}", summary_line(m, &csv_path), extras.line_suffix(m));
     }
     Ok(())
 }

@@ -131,6 +131,12 @@ where
         .iter()
         .flat_map(|c| c.points.iter().filter(|p| !p.aliased).map(|p| p.mtf))
         .chain(m.patches.iter().map(|p| p.mtf))
+        .chain(
+            extras
+                .lens_curves
+                .iter()
+                .flat_map(|c| c.points.iter().map(|p| p.1)),
+        )
         .fold(1.05, f64::max);
     // Room above a sharpening peak for its label.
     let ymax = if ymax > 1.05 { ymax + 0.1 } else { ymax }.min(1.6);
@@ -256,6 +262,7 @@ where
         draw_peak_marks(&mut chart, c, col, k, ymax)?;
     }
     super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
+    super::model_overlay::draw_lens_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     if !m.patches.is_empty() {
         let col = RGBColor(230, 120, 20);
         // Patches beyond the axis (aliased, far above Nyquist) are left off rather than pinned to its edge.

@@ -17,6 +17,7 @@ mod chart_output;
 mod chart_sinemtf;
 mod exif_jpeg;
 mod jpeg_region;
+mod lens_mtf;
 mod locate_each_chart;
 mod locate_find;
 mod locate_mtf;
