@@ -10,6 +10,7 @@
 pub mod batch;
 pub mod chart;
 pub mod distortion;
+pub mod fuzz;
 pub mod geometry;
 pub mod locate;
 pub mod measure;

@@ -23,3 +23,12 @@ $S --target demo:log $OPT --size 900x600 --bayer RGGB --full-well 20000 --read-n
 $S --target targets/a4_log.toml $OPT --gaussian sigma=2.5um --size 2000x1400 --rotate 4 \
    --tilt 15,y --falloff 0.2 --oversample 4 --full-well 20000 --read-noise 4 --seed 5 \
    --jpeg 90 -o testdata/a4_log_shot.jpg
+
+# A small JPEG with restart markers every 43 MCUs (0x2B), written by
+# libjpeg-turbo 2.1.5's cjpeg (Debian libjpeg-turbo-progs), for the scan-data
+# check (src/photo/jpeg_check.rs): a 320×192 colour pattern.
+python3 -c "
+w,h=320,192
+d=bytes(v for y in range(h) for x in range(w) for v in ((x*3)%256,(y*5)%256,((x^y)*7)%256))
+open('/tmp/rst.ppm','wb').write(b'P6 %d %d 255\n'%(w,h)+d)"
+cjpeg -quality 90 -restart 2B -outfile testdata/restart_markers_cjpeg.jpg /tmp/rst.ppm

@@ -29,7 +29,9 @@ create_exception!(
 fn measure_err(e: MeasureError) -> PyErr {
     let msg = e.to_string();
     match e.failure {
-        Failure::Decode(_) | Failure::Raw(_) | Failure::Target(_) => PyOSError::new_err(msg),
+        Failure::Decode(_) | Failure::Raw(_) | Failure::Target(_) | Failure::Damaged { .. } => {
+            PyOSError::new_err(msg)
+        }
         Failure::Options(_) => PyValueError::new_err(msg),
         _ => MeasurementError::new_err(msg),
     }
@@ -57,10 +59,15 @@ impl NativeMeasurement {
     fn source(&self) -> &str {
         &self.m.source
     }
-    /// Warnings and notices, one line each.
+    /// Warnings (something may be wrong with the result), one line each.
     #[getter]
     fn warnings(&self) -> Vec<String> {
         self.m.warnings.clone()
+    }
+    /// Notes (what was done or assumed), one line each.
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.m.notes.clone()
     }
     /// Pixel pitch (mm), when known.
     #[getter]

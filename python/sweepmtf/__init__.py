@@ -96,7 +96,8 @@ class Curve:
 class Measurement:
     """The result of measuring one photo.
 
-    ``curves`` (list of :class:`Curve`), ``warnings`` (list of one-line strings),
+    ``curves`` (list of :class:`Curve`), ``warnings`` (something may be wrong
+    with the result) and ``notes`` (what was done or assumed), lists of one-line strings,
     ``summary`` (the JSON summary, as ``STEM.summary.json``, as a dict),
     ``pixel_pitch_mm`` (None when unknown), ``roi`` (region corners, image px).
     """
@@ -106,6 +107,7 @@ class Measurement:
         pitch = native.pixel_pitch_mm
         self.source: str = native.source
         self.warnings: List[str] = list(native.warnings)
+        self.notes: List[str] = list(native.notes)
         self.pixel_pitch_mm: Optional[float] = pitch
         self.roi: List[Tuple[float, float]] = [tuple(p) for p in native.roi]
         curves = []

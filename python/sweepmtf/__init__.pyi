@@ -44,6 +44,7 @@ class Curve:
 class Measurement:
     source: str
     warnings: List[str]
+    notes: List[str]
     pixel_pitch_mm: Optional[float]
     roi: List[Tuple[float, float]]
     curves: List[Curve]

@@ -43,6 +43,7 @@ pub fn kind_of(f: &Failure) -> FailKind {
         | Failure::NoOscillation(_)
         | Failure::ModulationUnknown(_)
         | Failure::Unreliable(_) => FailKind::Measure,
+        Failure::Damaged { .. } => FailKind::Input,
     }
 }
 

@@ -53,6 +53,10 @@ fn rename_output(name: &str, old: &str, new: &str) -> String {
 
 /// Merges batch output folders `inputs` into `out`.
 pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, BatchError> {
+    // The output folder is held before anything is read: the inputs may be
+    // the output folder itself, which another run may be writing.
+    std::fs::create_dir_all(out).map_err(|e| BatchError::output(out, e))?;
+    let _lock = super::lock::FolderLock::acquire(out)?;
     let mut entries: Vec<Entry> = Vec::new();
     let mut total = 0;
     for dir in inputs {

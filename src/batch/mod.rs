@@ -19,6 +19,7 @@ pub mod base64;
 pub mod curve;
 pub mod discover;
 pub mod html;
+pub mod lock;
 pub mod manifest;
 pub mod measure_job;
 pub mod merge;
@@ -75,6 +76,16 @@ pub enum BatchError {
     /// A bad option value.
     #[error("{0}")]
     Usage(String),
+    /// Another run holds the output folder's lock.
+    #[error(
+        "{dir}: output folder in use by {holder} (lock file {dir}/.sweepmtf.lock); wait for it to finish or choose another folder"
+    )]
+    Locked {
+        /// The output folder.
+        dir: String,
+        /// Who holds it ("process 1234").
+        holder: String,
+    },
 }
 
 impl BatchError {
@@ -163,6 +174,8 @@ pub fn run_batch(
     progress: &dyn Progress,
 ) -> Result<BatchOutcome, BatchError> {
     std::fs::create_dir_all(out).map_err(|e| BatchError::output(out, e))?;
+    // Before anything is touched: a second run must not remove this run's temporaries.
+    let _lock = lock::FolderLock::acquire(out)?;
     atomic::remove_stale_temps(out, false).map_err(|e| BatchError::output(out, e))?;
     manifest::Manifest::of_run(plan.shard.to_string(), plan.total, &plan.shots).write(out)?;
     let run = runner::run_shots(&plan.shots, &out.join(SHOTS_DIR), job, opts, progress)?;

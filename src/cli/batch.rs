@@ -38,9 +38,6 @@ pub struct Args {
     /// Per-shot regions: CSV with columns file,x1,y1,x2,y2,x3,y3,x4,y4.
     #[arg(long, value_name = "ROIS.csv")]
     pub roi_file: Option<PathBuf>,
-    /// No progress output.
-    #[arg(short = 'q', long)]
-    pub quiet: bool,
     /// Measurement options (as `sweepmtf measure` takes them).
     #[command(flatten)]
     pub measure: super::measure_flags::MeasureFlags,
@@ -66,6 +63,7 @@ fn cli_error(e: BatchError) -> CliError {
         BatchError::Input { .. } | BatchError::NoShots(_) => Code::Input,
         BatchError::Output { .. } => Code::Output,
         BatchError::Usage(_) => Code::Usage,
+        BatchError::Locked { .. } => Code::Busy,
     };
     CliError::new(code, e.to_string())
 }
@@ -177,12 +175,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         force: args.force,
         retry_failed: args.retry_failed,
     };
+    let quiet = super::messages::level() == super::messages::Level::Quiet;
     quiet_worker_panics();
-    let progress = display(args.quiet);
+    let progress = display(quiet);
     let outcome = batch::run_batch(&plan, &args.out, &job, &opts, &progress).map_err(cli_error)?;
     let failed = outcome.run.failed();
     let total = outcome.run.records.len();
-    if !args.quiet {
+    if !quiet {
         eprintln!(
             "{} of {total} shots measured ({} this run, {} skipped as complete), {failed} failed; summary: {}",
             total - failed,
@@ -207,13 +206,15 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 pub fn run_merge(args: &MergeArgs) -> Result<(), CliError> {
     let m = batch::merge::merge(&args.inputs, &args.out).map_err(cli_error)?;
     let failed = m.records.iter().filter(|r| !r.is_ok()).count();
-    eprintln!(
-        "merged {} shots from {} folders ({} missing), {failed} failed; summary: {}",
-        m.records.len(),
-        args.inputs.len(),
-        m.missing,
-        args.out.join(batch::SUMMARY_CSV).display()
-    );
+    if super::messages::level() > super::messages::Level::Quiet {
+        eprintln!(
+            "merged {} shots from {} folders ({} missing), {failed} failed; summary: {}",
+            m.records.len(),
+            args.inputs.len(),
+            m.missing,
+            args.out.join(batch::SUMMARY_CSV).display()
+        );
+    }
     if failed > 0 {
         return Err(CliError::new(
             Code::Partial,

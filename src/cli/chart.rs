@@ -245,7 +245,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let chart = chart::layout(&spec).map_err(from_chart_error)?;
     format.check_size(&chart).map_err(from_chart_error)?;
     for w in &chart.warnings {
-        eprintln!("sweepmtf: warning: {w}");
+        super::messages::warning(w);
     }
     write_all(&chart, &encoding, format, &args.output)?;
     let mut line = format!(

@@ -17,6 +17,8 @@ pub enum Code {
     Output = 6,
     /// 7: a batch finished but some shots failed.
     Partial = 7,
+    /// 8: the output folder is in use by another `batch` or `merge` run.
+    Busy = 8,
 }
 
 impl From<Code> for std::process::ExitCode {

@@ -41,6 +41,7 @@ pub fn code_of(f: &Failure) -> Code {
         | Failure::NoOscillation(_)
         | Failure::ModulationUnknown(_)
         | Failure::Unreliable(_) => Code::Measure,
+        Failure::Damaged { .. } => Code::Input,
     }
 }
 
@@ -218,7 +219,10 @@ fn write_outputs(
     files.push((out("summary.json"), summary_text.into_bytes()));
     write_all_atomic(&files).map_err(out_err)?;
     for w in &m.warnings {
-        eprintln!("sweepmtf: warning: {name}: {w}");
+        super::messages::warning(&format!("{name}: {w}"));
+    }
+    for n in &m.notes {
+        super::messages::note(&format!("{name}: {n}"));
     }
     if a.json {
         println!("{summary_value}");

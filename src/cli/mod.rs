@@ -10,6 +10,7 @@ mod factors;
 mod measure;
 mod measure_flags;
 mod measure_model;
+mod messages;
 mod model;
 mod simulate;
 
@@ -21,6 +22,12 @@ pub use exit::{CliError, Code};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Also print notes (what was done or assumed) on stderr.
+    #[arg(short, long, global = true, conflicts_with = "quiet")]
+    verbose: bool,
+    /// Print only errors on stderr (no warnings, notes or progress).
+    #[arg(short, long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -57,6 +64,7 @@ pub fn main() -> std::process::ExitCode {
             };
         }
     };
+    messages::set_level(cli.quiet, cli.verbose);
     let result = match &cli.command {
         Command::Measure(a) => measure::run(a),
         Command::Chart(a) => chart::run(a),

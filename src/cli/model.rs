@@ -5,7 +5,10 @@
 use super::factors::FactorArgs;
 use super::{CliError, Code};
 use std::path::{Path, PathBuf};
-use sweepmtf::report::model_cut::{CutDirection, compute_cut, plot_cut, write_cut_csv};
+use sweepmtf::report::atomic::write_all_atomic;
+use sweepmtf::report::model_cut::{
+    CutDirection, F_MAX_LIMIT_CY_MM, POINTS_LIMIT, compute_cut, cut_csv, plot_cut_bytes,
+};
 use sweepmtf::report::model_io::OutputError;
 use sweepmtf::report::model_map::{compute_map, write_map_png};
 use sweepmtf::report::model_points::{read_points, write_points};
@@ -48,9 +51,9 @@ fn output_error(e: OutputError) -> CliError {
 
 fn f_max(args: &Args) -> Result<f64, CliError> {
     match args.f_max {
-        Some(f) if f.is_finite() && f > 0.0 => Ok(f),
+        Some(f) if f.is_finite() && f > 0.0 && f <= F_MAX_LIMIT_CY_MM => Ok(f),
         Some(f) => Err(CliError::usage(format!(
-            "--f-max must be a positive number of cycles/mm, got {f}"
+            "--f-max must be a number of cycles/mm in (0, {F_MAX_LIMIT_CY_MM:e}], got {f}"
         ))),
         None => Err(CliError::usage(
             "--f-max <cycles/mm> is required with --cut and --map",
@@ -85,11 +88,17 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     if args.cut.is_some() || args.map {
         f_max(args)?;
     }
-    if args.cut.is_some() && !(2..=10_000_000).contains(&args.points) {
-        return Err(CliError::usage("--points must be between 2 and 10000000"));
+    if args.cut.is_some() && !(2..=POINTS_LIMIT).contains(&args.points) {
+        return Err(CliError::usage(format!(
+            "--points must be between 2 and {POINTS_LIMIT}, got {}",
+            args.points
+        )));
     }
     if args.map && !(2..=4096).contains(&args.size) {
-        return Err(CliError::usage("--size must be between 2 and 4096"));
+        return Err(CliError::usage(format!(
+            "--size must be between 2 and 4096, got {}",
+            args.size
+        )));
     }
     if args.map
         && output
@@ -123,8 +132,23 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 output.display()
             )));
         }
-        write_cut_csv(&cut, output).map_err(output_error)?;
-        plot_cut(&cut, &format!("MTF: {title}"), &plot).map_err(output_error)?;
+        // Both files or neither: the plot is drawn before anything is written.
+        let png = plot_cut_bytes(&cut, &format!("MTF: {title}"), &plot).map_err(output_error)?;
+        let files = [
+            (output.clone(), cut_csv(&cut).into_bytes()),
+            (plot.clone(), png),
+        ];
+        for (path, _) in &files {
+            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|e| {
+                    CliError::new(
+                        Code::Output,
+                        format!("{}: cannot write: {e}", path.display()),
+                    )
+                })?;
+            }
+        }
+        write_all_atomic(&files).map_err(|e| CliError::new(Code::Output, e.to_string()))?;
     } else {
         let map = compute_map(&system, f_max(args)?, args.size);
         write_map_png(&map, &format!("MTF: {title}"), output).map_err(output_error)?;

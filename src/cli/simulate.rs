@@ -301,7 +301,7 @@ fn run_inner(a: &Args) -> Result<(), CliError> {
     let shot = simulate::render(&target, &system, &cam).map_err(sim_error)?;
     let written = simulate::write_shot(&shot, &a.output).map_err(sim_error)?;
     for w in &shot.warnings {
-        eprintln!("sweepmtf: warning: {w}");
+        super::messages::warning(w);
     }
     let mtf_nyq = shot.truth().and_then(|t| {
         t.rows

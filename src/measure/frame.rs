@@ -8,7 +8,7 @@ use super::preview::{make_preview, raw_preview};
 use super::region::{bbox_crop, read_set};
 use super::tone::photo_tone;
 use super::{
-    DISTORTION_PAD_PX, Failure, MeasureError, MeasureOptions, Measurement, given_distortion,
+    DISTORTION_PAD_PX, Failure, MeasureError, MeasureOptions, Measurement, Said, given_distortion,
     measure_planes_lens, resolve_distortion,
 };
 use crate::geometry::Point;
@@ -20,12 +20,13 @@ use crate::target::Target;
 use std::path::Path;
 
 /// Reads and decodes a photo (not a raw), and resolves its pixel pitch from
-/// EXIF and the options: the photo, the options with the pitch, the pitch's warnings.
+/// EXIF and the options: the photo, the options with the pitch, and the
+/// messages of decoding (damaged scan data) and of the pitch.
 pub(super) fn decode_with_pitch(
     path: &Path,
     name: &str,
     opts: &MeasureOptions,
-) -> Result<(Decoded, MeasureOptions, Vec<String>), MeasureError> {
+) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
     let name = name.to_string();
     let bytes = std::fs::read(path).map_err(|source| MeasureError {
         path: name.clone(),
@@ -40,6 +41,7 @@ pub(super) fn decode_with_pitch(
         failure: e.into(),
     })?;
     let facts = crate::photo::exif::facts_from_bytes(&bytes);
+    let damage = crate::photo::jpeg_check::scan_damage(&bytes);
     drop(bytes);
     let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
     let o = MeasureOptions {
@@ -47,8 +49,23 @@ pub(super) fn decode_with_pitch(
         ..opts.clone()
     };
     let mut warnings = dec.warnings.clone();
+    // The decoder's own report of damage, else the scan check's (which also
+    // sees damage the lenient decoder passes over, such as stray restart markers).
+    let decoder_saw_it = warnings.iter().any(|w| w.contains(super::DAMAGE_MARK));
+    if let Some(d) = damage.filter(|_| !decoder_saw_it) {
+        warnings.push(format!(
+            "damaged JPEG scan data ({d}): the picture may be partly grey"
+        ));
+    }
     warnings.extend(pitch.warnings);
-    Ok((dec, o, warnings))
+    Ok((
+        dec,
+        o,
+        Said {
+            warnings,
+            notes: pitch.notes,
+        },
+    ))
 }
 
 /// Rows below the region's lowest corner that a measurement may still read
@@ -76,9 +93,10 @@ pub(super) fn measure_frame_at(
     target: Option<&Target>,
     opts: &MeasureOptions,
     roi: &[Point; 4],
-    mut warnings: Vec<String>,
+    mut said: Said,
 ) -> Result<Measurement, MeasureError> {
     use crate::photo::raw::RawChannel;
+    let warnings = &mut said.warnings;
     let err = |failure: Failure| MeasureError {
         path: name.to_string(),
         failure,
@@ -150,9 +168,9 @@ pub(super) fn measure_frame_at(
     m.bits = frame.bits_per_sample as u32;
     m.tone = format!("linear raw (black level removed, white level = 1{greens})");
     m.green_gain = green_gain;
-    warnings.extend(pitch.warnings);
-    warnings.append(&mut m.warnings);
-    m.warnings = warnings;
+    said.warnings.extend(pitch.warnings);
+    said.notes.extend(pitch.notes);
+    said.put_before(&mut m);
     Ok(m)
 }
 
@@ -199,7 +217,7 @@ pub(super) fn measure_decoded_at(
     opts: &MeasureOptions,
     roi: &[Point; 4],
     seen: Option<(Crop, Plane)>,
-    mut warnings: Vec<String>,
+    mut said: Said,
 ) -> Result<Measurement, MeasureError> {
     let err = |failure: Failure| MeasureError {
         path: name.to_string(),
@@ -209,7 +227,7 @@ pub(super) fn measure_decoded_at(
     // Crop: the region's bounding box (+2 px).
     let crop = bbox_crop(&roi, dec.width, dec.height, 2.0);
     let (tone, tone_desc) =
-        photo_tone(dec, target, opts, crop, &roi, &mut warnings).map_err(err)?;
+        photo_tone(dec, target, opts, crop, &roi, &mut said.notes).map_err(err)?;
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
     let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
         let c = bbox_crop(&roi, dec.width, dec.height, DISTORTION_PAD_PX);
@@ -261,7 +279,6 @@ pub(super) fn measure_decoded_at(
     m.bits = dec.bits();
     m.tone = tone_desc;
     m.preview = preview;
-    warnings.append(&mut m.warnings);
-    m.warnings = warnings;
+    said.put_before(&mut m);
     Ok(m)
 }

@@ -93,6 +93,7 @@ pub fn measure_in_memory(
     };
     let mut m = measure_decoded(dec, name, target.as_ref(), &o)?;
     m.warnings.extend(pitch.warnings);
+    m.notes.extend(pitch.notes);
     Ok(m)
 }
 

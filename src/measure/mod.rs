@@ -50,7 +50,7 @@ pub use region::{rect_strip, target_homography};
 use frame::{decode_with_pitch, measure_decoded_at, measure_frame_at};
 use profile::BinOptions;
 use region::{
-    bbox_crop, found_warnings, full_grey, locate_region, location_failed, raw_read_window,
+    bbox_crop, found_said, full_grey, locate_region, location_failed, raw_read_window,
     refine_or_keep, resolve_roi, strips,
 };
 use strip::measure_strip;
@@ -189,6 +189,14 @@ pub enum Failure {
     /// bin, a poorly fitting phase law, or modulation lost in noise).
     #[error("curve refused: {0}")]
     Unreliable(String),
+    /// A failure in a photo whose decoder reported damaged data (the likely cause).
+    #[error("{failure} (the photo itself is damaged: {damage})")]
+    Damaged {
+        /// The failure itself.
+        failure: Box<Failure>,
+        /// What the decoder or the scan check found damaged.
+        damage: String,
+    },
 }
 
 /// A failed measurement: the file and the cause, displayed as one line.
@@ -277,13 +285,63 @@ pub struct Measurement {
     pub curves: Vec<Curve>,
     /// Sine-patch results.
     pub patches: Vec<PatchResult>,
-    /// Warnings and notices (one line each).
+    /// Warnings: something may be wrong with the result (one line each).
     pub warnings: Vec<String>,
+    /// Notes: what was done or assumed (one line each; the CLI shows them with `-v`).
+    pub notes: Vec<String>,
     /// The lens distortion given or estimated (None: not looked for, e.g. with a target).
     pub distortion: Option<DistortionFound>,
     /// Picture of the measured area.
     pub preview: Preview,
 }
+
+/// Messages gathered around a measurement before its result exists: warnings
+/// (something may be wrong with the result) and notes (what was done or assumed).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Said {
+    /// Warnings, one line each.
+    pub warnings: Vec<String>,
+    /// Notes, one line each.
+    pub notes: Vec<String>,
+}
+
+impl Said {
+    /// Puts these messages before the measurement's own.
+    pub(crate) fn put_before(self, m: &mut Measurement) {
+        let Said {
+            mut warnings,
+            mut notes,
+        } = self;
+        warnings.append(&mut m.warnings);
+        notes.append(&mut m.notes);
+        m.warnings = warnings;
+        m.notes = notes;
+    }
+
+    /// The failure `e` of a photo these messages say is damaged, with the
+    /// damage named as its likely cause; `e` itself otherwise.
+    pub(crate) fn blame(&self, e: MeasureError) -> MeasureError {
+        match self.warnings.iter().find(|w| w.contains(DAMAGE_MARK)) {
+            Some(w) => MeasureError {
+                path: e.path,
+                failure: Failure::Damaged {
+                    failure: Box::new(e.failure),
+                    damage: w.clone(),
+                },
+            },
+            None => e,
+        }
+    }
+
+    /// Adds these messages after the measurement's own.
+    pub(crate) fn add_to(self, m: &mut Measurement) {
+        m.warnings.extend(self.warnings);
+        m.notes.extend(self.notes);
+    }
+}
+
+/// The words every damaged-data warning carries (see [`Said::blame`]).
+pub(crate) const DAMAGE_MARK: &str = "scan data";
 
 /// Decodes a photo and measures it.
 pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, MeasureError> {
@@ -295,9 +353,9 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
     if crate::photo::raw::is_raw_path(path) {
         return measure_raw(path, &name, target.as_ref(), opts);
     }
-    let (dec, o, pitch_warnings) = decode_with_pitch(path, &name, opts)?;
-    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o)?;
-    m.warnings.extend(pitch_warnings);
+    let (dec, o, said) = decode_with_pitch(path, &name, opts)?;
+    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o).map_err(|e| said.blame(e))?;
+    said.add_to(&mut m);
     Ok(m)
 }
 
@@ -331,22 +389,23 @@ pub fn measure_file_each(
             .iter()
             .enumerate()
             .map(|(i, c)| {
-                let w = found_warnings(c, i, n);
+                let w = found_said(c, i, n);
                 let m = measure_frame_at(&frame, &name, Some(&target), opts, &c.corners_px, w)?;
                 Ok(name_chart(m, i, n))
             })
             .collect();
     }
-    let (dec, o, pitch_warnings) = decode_with_pitch(path, &name, opts)?;
-    let charts = located(&full_grey(&dec)[0])?;
+    let (dec, o, said) = decode_with_pitch(path, &name, opts)?;
+    let charts = located(&full_grey(&dec)[0]).map_err(|e| said.blame(e))?;
     let n = charts.len();
     charts
         .iter()
         .enumerate()
         .map(|(i, c)| {
-            let w = found_warnings(c, i, n);
-            let mut m = measure_decoded_at(&dec, &name, Some(&target), &o, &c.corners_px, None, w)?;
-            m.warnings.extend(pitch_warnings.iter().cloned());
+            let w = found_said(c, i, n);
+            let mut m = measure_decoded_at(&dec, &name, Some(&target), &o, &c.corners_px, None, w)
+                .map_err(|e| said.blame(e))?;
+            said.clone().add_to(&mut m);
             Ok(name_chart(m, i, n))
         })
         .collect()
@@ -384,11 +443,11 @@ pub fn measure_raw(
         (c.x0, c.y0, c.x1, c.y1)
     });
     let frame = decode_raw_within(path, want).map_err(|e| err(Failure::Raw(e.to_string())))?;
-    let mut warnings = Vec::new();
+    let mut said = Said::default();
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
         (None, Some(t)) => {
-            locate_region(&frame.location_plane(), t, opts, &mut warnings).map_err(err)?
+            locate_region(&frame.location_plane(), t, opts, &mut said).map_err(err)?
         }
         _ => {
             let given = resolve_roi(opts, frame.width, frame.height).map_err(err)?;
@@ -396,13 +455,13 @@ pub fn measure_raw(
                 // Only the region and the search band around it are converted.
                 let c = bbox_crop(&given, frame.width, frame.height, REFINE_SEARCH_PX + 8.0);
                 let plane = frame.location_plane_within((c.x0, c.y0, c.x1, c.y1));
-                refine_or_keep(&plane, given, target, &mut warnings)
+                refine_or_keep(&plane, given, target, &mut said)
             } else {
                 given
             }
         }
     };
-    measure_frame_at(&frame, name, target, opts, &roi, warnings)
+    measure_frame_at(&frame, name, target, opts, &roi, said)
 }
 
 /// Reads the target description named in the options, if any.
@@ -439,21 +498,19 @@ pub fn measure_decoded(
         failure,
     };
     check_options(opts).map_err(err)?;
-    let mut warnings = Vec::new();
+    let mut said = Said::default();
     // The luminance plane refinement converted, kept for the measurement when it can serve.
     let mut seen: Option<(Crop, Plane)> = None;
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
-        (None, Some(t)) => {
-            locate_region(&full_grey(dec)[0], t, opts, &mut warnings).map_err(err)?
-        }
+        (None, Some(t)) => locate_region(&full_grey(dec)[0], t, opts, &mut said).map_err(err)?,
         _ => {
             let given = resolve_roi(opts, dec.width, dec.height).map_err(err)?;
             if opts.refine_roi {
                 // Only the region and the search band around it are converted.
                 let crop = bbox_crop(&given, dec.width, dec.height, REFINE_SEARCH_PX + 8.0);
                 let grey = planes(dec, crop, &default_tone(dec.bits()).0, Channel::Luma);
-                let refined = refine_or_keep(&grey[0], given, target, &mut warnings);
+                let refined = refine_or_keep(&grey[0], given, target, &mut said);
                 seen = grey.into_iter().next().map(|p| (crop, p));
                 refined
             } else {
@@ -461,7 +518,7 @@ pub fn measure_decoded(
             }
         }
     };
-    measure_decoded_at(dec, name, target, opts, &roi, seen, warnings)
+    measure_decoded_at(dec, name, target, opts, &roi, seen, said)
 }
 
 /// Checks the advanced options' ranges (bin width, margin, window, gamma, pixel pitch).
@@ -556,9 +613,10 @@ fn measure_planes_lens(
     distortion: Option<DistortionFound>,
 ) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     let lens = distortion.and_then(|d| d.lens(size.0, size.1));
     if let Some(d) = &distortion {
-        warnings.push(d.note());
+        notes.push(d.note());
     }
     let specs = strips(roi, target, lens.as_ref())?;
     let mut curves = Vec::new();
@@ -630,6 +688,7 @@ fn measure_planes_lens(
         curves,
         patches: patch_rows,
         warnings,
+        notes,
         distortion,
         preview: Preview::default(),
     })

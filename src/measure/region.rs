@@ -6,7 +6,7 @@
 //! per-row column span) that binning touches, so only that is converted.
 
 use super::profile::{self, Strip};
-use super::{Failure, LawKind, MeasureOptions, PhaseLaw, REFINE_SEARCH_PX};
+use super::{Failure, LawKind, MeasureOptions, PhaseLaw, REFINE_SEARCH_PX, Said};
 use crate::distortion::Lens;
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
@@ -15,16 +15,18 @@ use crate::photo::linearise::{Channel, Crop, default_tone, planes};
 use crate::target::{Direction, Sweep, SweepLaw, Target};
 
 /// The chart `opts.chart_index` picks in `plane` (see [`crate::locate::find_chart`]):
-/// its corners (image px), the search's warnings added to `warnings`.
+/// its corners (image px), the search's messages added to `said`.
 pub(super) fn locate_region(
     plane: &Plane,
     target: &Target,
     opts: &MeasureOptions,
-    warnings: &mut Vec<String>,
+    said: &mut Said,
 ) -> Result<[Point; 4], Failure> {
     let loc =
         crate::locate::find_chart(plane, target, opts.chart_index).map_err(location_failed)?;
-    warnings.extend(found_warnings(&loc, 0, 1));
+    let found = found_said(&loc, 0, 1);
+    said.warnings.extend(found.warnings);
+    said.notes.extend(found.notes);
     Ok(loc.corners_px)
 }
 
@@ -33,15 +35,17 @@ pub(super) fn location_failed(e: crate::locate::LocateError) -> Failure {
     Failure::Region(format!("automatic location failed: {e}"))
 }
 
-/// The warnings of a chart found automatically: the search's own, and which
-/// of `n` charts (left to right) it is when there are several.
-pub(super) fn found_warnings(c: &crate::locate::Located, i: usize, n: usize) -> Vec<String> {
-    let mut w = c.warnings.clone();
-    w.push("region found automatically from the target's fiducials".into());
+/// The messages of a chart found automatically: the search's own warnings;
+/// notes saying how it was found and which of `n` charts (left to right) it is.
+pub(super) fn found_said(c: &crate::locate::Located, i: usize, n: usize) -> Said {
+    let mut notes = vec!["region found automatically from the target's fiducials".to_string()];
     if n > 1 {
-        w.push(format!("chart index {i} of the {n} found (left to right)"));
+        notes.push(format!("chart index {i} of the {n} found (left to right)"));
     }
-    w
+    Said {
+        warnings: c.warnings.clone(),
+        notes,
+    }
 }
 
 /// The image rectangle a raw measurement with the corners `roi` reads (frame
@@ -72,7 +76,7 @@ pub(super) fn refine_or_keep(
     plane: &Plane,
     given: [Point; 4],
     target: Option<&Target>,
-    warnings: &mut Vec<String>,
+    said: &mut Said,
 ) -> [Point; 4] {
     match crate::locate::refine_roi(plane, given, target, REFINE_SEARCH_PX) {
         Ok(refined) => {
@@ -82,7 +86,7 @@ pub(super) fn refine_or_keep(
                 .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
                 .fold(0.0, f64::max);
             if target.is_some() {
-                warnings.push(format!(
+                said.notes.push(format!(
                     "region corners refined to the edges (moved up to {moved:.2} px)"
                 ));
             } else {
@@ -97,7 +101,7 @@ pub(super) fn refine_or_keep(
                     along = along.max((ex * ux + ey * uy).abs());
                     across = across.max((ey * ux - ex * uy).abs());
                 }
-                warnings.push(format!(
+                said.notes.push(format!(
                     "region corners refined to the edges: long edges moved up to {across:.2} px \
                      across the strip onto the edges seen; ends kept, turned along the printed \
                      bars (corners slid up to {along:.2} px along the strip)"
@@ -106,7 +110,8 @@ pub(super) fn refine_or_keep(
             refined
         }
         Err(e) => {
-            warnings.push(format!("region corners used as given: {e}"));
+            said.warnings
+                .push(format!("region corners used as given: {e}"));
             given
         }
     }

@@ -13,7 +13,7 @@ use crate::photo::linearise::{Crop, Tone, ToneCurve, default_tone, planes};
 use crate::target::{Direction, Target};
 
 /// The tone that makes the photo's codes linear, and the summary's line for
-/// it; the default tone's notice goes to `warnings`. `crop` (image px) holds
+/// it; the default tone's assumption goes to `notes`. `crop` (image px) holds
 /// the region `roi`, read for `--tone chart`.
 pub(super) fn photo_tone(
     dec: &Decoded,
@@ -21,7 +21,7 @@ pub(super) fn photo_tone(
     opts: &MeasureOptions,
     crop: Crop,
     roi: &[Point; 4],
-    warnings: &mut Vec<String>,
+    notes: &mut Vec<String>,
 ) -> Result<(Tone, String), Failure> {
     if opts.tone_chart {
         let t = target.ok_or_else(|| {
@@ -38,7 +38,7 @@ pub(super) fn photo_tone(
         Ok((Tone::Gamma(g), format!("power law, gamma {g}")))
     } else {
         let (t, notice) = default_tone(dec.bits());
-        warnings.extend(notice);
+        notes.extend(notice);
         let d = match t {
             Tone::Srgb => "sRGB curve (8-bit default)".to_string(),
             _ => "linear (16-bit default)".to_string(),

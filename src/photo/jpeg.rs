@@ -189,7 +189,7 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
         d.decode_into(&mut buf[..width * decoded * channels])
             .map_err(|e| corrupt(e.to_string()))?;
         warnings.push(format!(
-            "{name}: JPEG scan data is corrupt ({strict}); measured from a lenient decode, damaged blocks may be grey or wrong"
+            "JPEG scan data is corrupt ({strict}); measured from a lenient decode, damaged blocks may be grey or wrong"
         ));
     }
     Ok(Decoded {

@@ -7,6 +7,7 @@ pub mod decode;
 pub mod exif;
 pub(crate) mod hugebuf;
 pub mod jpeg;
+pub mod jpeg_check;
 pub mod linearise;
 pub mod pitch;
 pub mod raw;

@@ -43,8 +43,10 @@ pub struct PitchResult {
     pub sensor_pitch_mm: Option<f64>,
     /// Factor applied to the sensor pitch for a resized image (EXIF width / stored width).
     pub scale: f64,
-    /// Why the pitch was rescaled, refused or overridden, one line each.
+    /// Why the pitch was refused (something in the file looks wrong), one line each.
     pub warnings: Vec<String>,
+    /// What was done or assumed (no pitch in the EXIF, rescaled, overridden), one line each.
+    pub notes: Vec<String>,
 }
 
 impl PitchResult {
@@ -63,7 +65,14 @@ pub fn resolve(
     override_mm: Option<f64>,
 ) -> PitchResult {
     let mut warnings = Vec::new();
-    let exif = from_exif(facts, actual_width_px, actual_height_px, &mut warnings);
+    let mut notes = Vec::new();
+    let exif = from_exif(
+        facts,
+        actual_width_px,
+        actual_height_px,
+        &mut warnings,
+        &mut notes,
+    );
     let sensor_pitch_mm = exif.map(|(sensor, _)| sensor);
     if let Some(p) = override_mm {
         if p.is_finite() && p > 0.0 {
@@ -83,7 +92,8 @@ pub fn resolve(
                 source: PitchSource::Override,
                 sensor_pitch_mm,
                 scale: 1.0,
-                warnings: w,
+                warnings,
+                notes: w,
             };
         }
         warnings.push(format!(
@@ -101,9 +111,10 @@ pub fn resolve(
             sensor_pitch_mm,
             scale,
             warnings,
+            notes,
         },
         None => {
-            warnings.push(
+            notes.push(
                 "pixel pitch unknown: frequencies in cycles/pixel only (give --pixel-pitch for lp/mm)"
                     .to_string(),
             );
@@ -113,6 +124,7 @@ pub fn resolve(
                 sensor_pitch_mm,
                 scale: 1.0,
                 warnings,
+                notes,
             }
         }
     }
@@ -124,12 +136,13 @@ fn from_exif(
     aw: usize,
     ah: usize,
     warnings: &mut Vec<String>,
+    notes: &mut Vec<String>,
 ) -> Option<(f64, f64)> {
     let Some(xres) = facts.focal_plane_x_res_px_per_unit else {
         if facts.focal_plane_y_res_px_per_unit.is_some() {
             warnings.push("EXIF has FocalPlaneYResolution but no X resolution".to_string());
         } else {
-            warnings.push("no FocalPlaneXResolution in the EXIF".to_string());
+            notes.push("no FocalPlaneXResolution in the EXIF".to_string());
         }
         return None;
     };
@@ -162,7 +175,7 @@ fn from_exif(
         ));
         return None;
     }
-    let scale = rescale(facts, aw, ah, warnings)?;
+    let scale = rescale(facts, aw, ah, warnings, notes)?;
     // The sensor's size: the EXIF frame if known, else the stored one scaled back.
     let (sw, sh) = match (facts.exif_width_px, facts.exif_height_px) {
         (Some(w), Some(h)) => (w as f64, h as f64),
@@ -186,7 +199,13 @@ fn from_exif(
 
 /// Scale from sensor pixels to stored pixels (EXIF width / stored width), or
 /// `None` when the stored image cannot be related to the EXIF frame.
-fn rescale(facts: &ExifFacts, aw: usize, ah: usize, warnings: &mut Vec<String>) -> Option<f64> {
+fn rescale(
+    facts: &ExifFacts,
+    aw: usize,
+    ah: usize,
+    warnings: &mut Vec<String>,
+    notes: &mut Vec<String>,
+) -> Option<f64> {
     if facts.from_raw {
         // The raw frame is the sensor itself; EXIF sizes describe the camera's JPEG.
         return Some(1.0);
@@ -235,7 +254,7 @@ fn rescale(facts: &ExifFacts, aw: usize, ah: usize, warnings: &mut Vec<String>) 
     if near(rx, 1.0) {
         return Some(1.0);
     }
-    warnings.push(format!(
+    notes.push(format!(
         "stored image is {aw} px wide but the EXIF describes {ew} px: pixel pitch scaled by {ew}/{aw} = {rx:.4}"
     ));
     Some(rx)
@@ -356,7 +375,8 @@ mod tests {
         let r = resolve(&f, 6000, 4000, Some(0.004));
         assert_eq!(r.pitch_mm, Some(0.004));
         assert_eq!(r.source, PitchSource::Override);
-        assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
+        assert_eq!(r.notes.len(), 1, "{:?}", r.notes);
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
         let r = resolve(&f, 6000, 4000, Some(-1.0));
         assert_eq!(r.source, PitchSource::Exif);
         assert!(r.warnings[0].contains("ignored"));

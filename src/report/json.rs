@@ -99,6 +99,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
         "curves": curves,
         "patches": patches,
         "warnings": m.warnings,
+        "notes": m.notes,
     });
     if let Some(t) = t {
         v["timings_ms"] = json!({

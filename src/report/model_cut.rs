@@ -84,6 +84,14 @@ pub struct Cut {
     pub nyquist: Option<f64>,
 }
 
+/// The highest frequency a cut or map may reach, cycles/mm (one cycle per
+/// nanometre: beyond any optics or pixel; larger values only make the plot's
+/// axis arithmetic overflow).
+pub const F_MAX_LIMIT_CY_MM: f64 = 1e6;
+
+/// The most samples a cut may have (its CSV is then about 100 MB).
+pub const POINTS_LIMIT: usize = 1_000_000;
+
 /// Evaluates `system` at `n` ≥ 2 equally spaced frequencies 0..=f_max along `dir`.
 pub fn compute_cut(system: &System, dir: CutDirection, f_max: f64, n: usize) -> Cut {
     let n = n.max(2);
@@ -279,6 +287,11 @@ where
 
 /// Draws the cut (total and each factor) to `path`: SVG if it ends in `.svg`, else PNG.
 pub fn plot_cut(cut: &Cut, title: &str, path: &Path) -> Result<(), OutputError> {
+    write_atomic(path, &plot_cut_bytes(cut, title, path)?)
+}
+
+/// The plot of the cut as file bytes for `path` (SVG if it ends in `.svg`, else PNG).
+pub fn plot_cut_bytes(cut: &Cut, title: &str, path: &Path) -> Result<Vec<u8>, OutputError> {
     ensure_font();
     let svg = path
         .extension()
@@ -302,7 +315,7 @@ pub fn plot_cut(cut: &Cut, title: &str, path: &Path) -> Result<(), OutputError> 
         .map_err(|c| OutputError::new(path, c))?;
         encode_png(&buf, SIZE.0, SIZE.1).map_err(|c| OutputError::new(path, c))?
     };
-    write_atomic(path, &bytes)
+    Ok(bytes)
 }
 
 #[cfg(test)]

@@ -55,7 +55,7 @@ fn sx60_gives_the_focal_plane_pitch() {
 }
 
 #[test]
-fn downscaled_s40_pitch_is_rescaled_to_the_stored_pixels_with_a_warning() {
+fn downscaled_s40_pitch_is_rescaled_to_the_stored_pixels_with_a_note() {
     let p = realdata("exif_jpeg/canon_powershot_s40_downscaled.jpg");
     let f = read_facts(&p).unwrap();
     assert_eq!(f.focal_plane_x_res_px_per_unit, Some(56800.0 / 7.0));
@@ -67,11 +67,9 @@ fn downscaled_s40_pitch_is_rescaled_to_the_stored_pixels_with_a_warning() {
     let sensor = 25.4 / (56800.0 / 7.0);
     assert!((r.sensor_pitch_mm.unwrap() - sensor).abs() < 1e-15);
     assert!((r.pitch_mm.unwrap() - sensor * 2272.0 / 480.0).abs() < 1e-15);
-    assert!(
-        r.warnings.iter().any(|w| w.contains("2272")),
-        "{:?}",
-        r.warnings
-    );
+    // What was done (rescaled) is a note, not a warning.
+    assert!(r.notes.iter().any(|w| w.contains("2272")), "{:?}", r.notes);
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     // --pixel-pitch still wins
     let r = pitch::resolve(&f, w, h, Some(0.0148));
     assert_eq!(
@@ -91,7 +89,7 @@ fn d70_without_focal_plane_tags_falls_back_to_cycles_per_pixel() {
     let (w, h) = stored_size(&p);
     let r = pitch::resolve(&f, w, h, None);
     assert_eq!((r.pitch_mm, r.source), (None, PitchSource::None));
-    assert!(r.warnings.iter().any(|w| w.contains("--pixel-pitch")));
+    assert!(r.notes.iter().any(|w| w.contains("--pixel-pitch")));
     // auto model needs a pitch, which must come from --pixel-pitch here
     assert!(pitch::auto_model_specs(&f, 0.0078, 550e-6).is_ok());
 }

@@ -75,11 +75,11 @@ fn each_chart_of_a_frame_is_measured_against_its_own_truth() {
             "chart {k}: RMS {rms:.4}"
         );
         assert!(
-            m.warnings
+            m.notes
                 .iter()
                 .any(|w| w.contains(&format!("chart index {k} of the 2"))),
             "{:?}",
-            m.warnings
+            m.notes
         );
     }
 }

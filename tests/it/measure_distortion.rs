@@ -196,7 +196,7 @@ fn barrel_3_percent_near_the_bottom_edge_estimated_from_the_strip() {
     assert_eq!(d.source, DistortionSource::Estimated);
     assert!((d.model.b / b - 1.0).abs() < 0.1, "b {} vs {b}", d.model.b);
     assert!(
-        m.warnings
+        m.notes
             .iter()
             .any(|w| w.contains("lens distortion estimated"))
     );

@@ -147,14 +147,14 @@ fn refinement_keeps_exact_strip_corners() {
     assert!(
         moved <= 1.0,
         "exact corners moved {moved:.2} px: {:?}",
-        m.warnings
+        m.notes
     );
     assert!(
-        m.warnings
+        m.notes
             .iter()
             .any(|w| w.contains("long edges moved") && w.contains("ends kept")),
         "{:?}",
-        m.warnings
+        m.notes
     );
 }
 

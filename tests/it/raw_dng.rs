@@ -203,7 +203,7 @@ fn missing_optics_metadata_is_absent_with_warnings_not_absurd_values() {
         let p = pitch::resolve(&facts, f.width, f.height, None);
         assert_eq!(p.pitch_mm, None);
         assert_eq!(p.source, PitchSource::None);
-        assert!(!p.warnings.is_empty());
+        assert!(!p.notes.is_empty());
         let e = pitch::auto_model_specs(&facts, 0.0043, 550e-6).unwrap_err();
         assert!(e.contains("f-number"), "{e}");
         let p = pitch::resolve(&facts, f.width, f.height, Some(0.0043));

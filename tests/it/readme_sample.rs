@@ -132,6 +132,7 @@ fn refine_roi_absorbs_five_pixel_corner_errors() {
             "--target",
             "targets/a4_log.toml",
             "--refine-roi",
+            "-v",
             "--roi",
         ])
         .arg(roi.join(","))

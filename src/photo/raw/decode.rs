@@ -295,6 +295,12 @@ const RAWLER: &str = "rawler 0.8.0";
 /// [`decode_raw`] uses it for the files the windowed DNG reader does not handle.
 pub fn decode_raw_with_rawler(path: &Path) -> Result<RawFrame, RawError> {
     let src = open(path)?;
+    if let Some(cause) = super::dng::implausible_tiff_size(path) {
+        return Err(RawError::Corrupt {
+            path: path.display().to_string(),
+            cause,
+        });
+    }
     // The TIFF EXIF copy is read and freed before the image buffer exists,
     // so the two never add up in the peak memory.
     let tiff = tiff_exif(src.buf());

@@ -202,6 +202,45 @@ pub(crate) fn read_dng_facts(path: &Path) -> Result<Option<ExifFacts>, RawError>
     Ok(open_dng(path)?.map(|(_, _, tiff)| facts_and_names(path, &tiff).0))
 }
 
+/// Samples one image of a raw may plausibly hold: no camera makes a
+/// gigasample frame, so a header saying so is damaged.
+const MAX_SAMPLES: usize = 1 << 30;
+
+/// The first image size in the TIFF structure of the file at `path` that no
+/// camera makes (width × height × samples per pixel over [`MAX_SAMPLES`]),
+/// as a cause for [`RawError::Corrupt`]; `None` when every size is plausible
+/// or the file is not TIFF-based. Checked before rawler decodes, which
+/// allocates whatever a damaged header asks for (an allocation failure
+/// aborts the process; it cannot be caught).
+pub(crate) fn implausible_tiff_size(path: &Path) -> Option<String> {
+    let mut file = File::open(path).ok()?;
+    let mut head = [0u8; 4];
+    file.read_exact(&mut head).ok()?;
+    if head != *b"II*\0" && head != *b"MM\0*" {
+        return None;
+    }
+    file.seek(SeekFrom::Start(0)).ok()?;
+    let mut reader = BufReader::with_capacity(64 << 10, file);
+    let tiff = match guard::contain(|| GenericTiffReader::new(&mut reader, 0, 0, None, &[])) {
+        Ok(Ok(t)) => t,
+        _ => return None,
+    };
+    tiff.file()
+        .chain
+        .iter()
+        .flat_map(|ifd| ifd.find_ifds_with_tag(TiffCommonTag::ImageWidth))
+        .find_map(|ifd| {
+            let width = usize_at(ifd, TiffCommonTag::ImageWidth, 0).unwrap_or(0);
+            let height = usize_at(ifd, TiffCommonTag::ImageLength, 0).unwrap_or(0);
+            let spp = usize_at(ifd, TiffCommonTag::SamplesPerPixel, 0).unwrap_or(1);
+            let n = width
+                .checked_mul(height)
+                .and_then(|n| n.checked_mul(spp.max(1)));
+            n.is_none_or(|n| n > MAX_SAMPLES)
+                .then(|| format!("an implausible image size ({width}×{height}×{spp} samples)"))
+        })
+}
+
 /// The raw IFD rawler decodes: the first full-resolution IFD with a supported compression.
 fn raw_ifd(tiff: &GenericTiffReader) -> Option<&IFD> {
     tiff.find_ifds_with_tag(TiffCommonTag::Compression)
@@ -242,7 +281,7 @@ fn frame_of(
     if width
         .checked_mul(height)
         .and_then(|n| n.checked_mul(spp))
-        .is_none_or(|n| n > 1 << 30)
+        .is_none_or(|n| n > MAX_SAMPLES)
     {
         return Err(corrupt(format!(
             "an implausible image size ({width}×{height}×{spp} samples)"

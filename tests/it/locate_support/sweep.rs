@@ -486,7 +486,7 @@ pub fn refine_trial_on(
         given_err_px: err(&given),
         refined_err_px: err(&refined.roi),
         notes: refined
-            .warnings
+            .notes
             .iter()
             .filter(|w| w.contains("region"))
             .cloned()
