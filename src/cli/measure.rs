@@ -180,18 +180,31 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Writes one measurement's outputs as `STEM.*` in the output folder and
-/// prints its warnings and its summary line (or JSON).
-fn write_outputs(
-    a: &Args,
+/// The files `measure` writes for one measurement (in writing order), its
+/// JSON summary and the summary line's suffix.
+pub struct Outputs {
+    /// (path, bytes) of each file.
+    pub files: Vec<(PathBuf, Vec<u8>)>,
+    /// The path of `STEM.mtf.csv`.
+    pub csv_path: PathBuf,
+    /// The JSON summary (as written to `STEM.summary.json`).
+    pub summary: serde_json::Value,
+    /// Appended to the summary line (the model comparison, when a model is drawn).
+    pub line_suffix: String,
+}
+
+/// Builds one measurement's outputs as `out/STEM.*` (nothing is written);
+/// `sweepmtf gui` saves through this too, so its files are `measure`'s.
+pub fn outputs(
     m: &Measurement,
+    out_dir: &Path,
     stem: &str,
+    plot: PlotFormat,
     prepared: &super::measure_model::Prepared,
     timings: Timings,
-) -> Result<(), CliError> {
-    let name = a.photo.display().to_string();
+) -> Result<Outputs, CliError> {
     let extras = prepared.finish(m)?;
-    let out = |suffix: &str| a.out.join(format!("{stem}.{suffix}"));
+    let out = |suffix: &str| out_dir.join(format!("{stem}.{suffix}"));
     let out_err =
         |e: sweepmtf::report::atomic::ReportError| CliError::new(Code::Output, e.to_string());
     let csv_path = out("mtf.csv");
@@ -204,20 +217,39 @@ fn write_outputs(
             files.push((out("patches.csv"), extras.patches_csv(csv::patches_csv(m))));
         }
     }
-    let plot_ext = match a.flags.plot {
+    let plot_ext = match plot {
         PlotFormat::Png => "mtf.png",
         PlotFormat::Svg => "mtf.svg",
     };
     files.push((
         out(plot_ext),
-        mtf_plot_with(m, a.flags.plot, &extras.plot).map_err(out_err)?,
+        mtf_plot_with(m, plot, &extras.plot).map_err(out_err)?,
     ));
     files.push((out("roi.png"), roi_plot::roi_plot(m).map_err(out_err)?));
     let summary_value = extras.json(summary(m, Some(timings)), m);
     let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
     summary_text.push('\n');
     files.push((out("summary.json"), summary_text.into_bytes()));
-    write_all_atomic(&files).map_err(out_err)?;
+    Ok(Outputs {
+        files,
+        csv_path,
+        summary: summary_value,
+        line_suffix: extras.line_suffix(m),
+    })
+}
+
+/// Writes one measurement's outputs as `STEM.*` in the output folder and
+/// prints its warnings and its summary line (or JSON).
+fn write_outputs(
+    a: &Args,
+    m: &Measurement,
+    stem: &str,
+    prepared: &super::measure_model::Prepared,
+    timings: Timings,
+) -> Result<(), CliError> {
+    let name = a.photo.display().to_string();
+    let o = outputs(m, &a.out, stem, a.flags.plot, prepared, timings)?;
+    write_all_atomic(&o.files).map_err(|e| CliError::new(Code::Output, e.to_string()))?;
     for w in &m.warnings {
         super::messages::warning(&format!("{name}: {w}"));
     }
@@ -225,9 +257,9 @@ fn write_outputs(
         super::messages::note(&format!("{name}: {n}"));
     }
     if a.json {
-        println!("{summary_value}");
+        println!("{}", o.summary);
     } else {
-        println!("{}{}", summary_line(m, &csv_path), extras.line_suffix(m));
+        println!("{}{}", summary_line(m, &o.csv_path), o.line_suffix);
     }
     Ok(())
 }

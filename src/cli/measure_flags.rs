@@ -129,11 +129,11 @@ fn parse_distortion(s: &str) -> Result<sweepmtf::distortion::Ptlens, String> {
     s.parse()
 }
 
-fn parse_method(s: &str) -> Result<Method, String> {
+pub fn parse_method(s: &str) -> Result<Method, String> {
     Method::parse(s).ok_or_else(|| format!("'{s}': use extrema, fit or envelope"))
 }
 
-fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
+pub fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
     match s {
         "auto" => Ok(SweepChoice::Auto),
         "linear" => Ok(SweepChoice::Linear),
@@ -142,7 +142,7 @@ fn parse_sweep(s: &str) -> Result<SweepChoice, String> {
     }
 }
 
-fn parse_channel(s: &str) -> Result<Channel, String> {
+pub fn parse_channel(s: &str) -> Result<Channel, String> {
     Channel::parse(s).ok_or_else(|| format!("'{s}': use luma, r, g, b or all"))
 }
 

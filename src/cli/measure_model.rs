@@ -57,6 +57,13 @@ pub struct Prepared {
 
 /// Reads the EXIF facts and the model file; checks `auto` has an f-number. Runs before measuring.
 pub fn prepare(a: &ModelArgs, photo: &Path) -> Result<Prepared, CliError> {
+    let facts = sweepmtf::photo::exif::read_facts(photo).unwrap_or_default();
+    prepare_with(a, facts, &photo.display().to_string())
+}
+
+/// [`prepare`] with the EXIF facts already read (`sweepmtf gui`, which holds
+/// uploaded photos in memory); `name` is the photo as shown in messages.
+pub fn prepare_with(a: &ModelArgs, facts: ExifFacts, name: &str) -> Result<Prepared, CliError> {
     let wavelength_mm = match &a.wavelength {
         None => 550e-6,
         Some(t) => {
@@ -75,15 +82,13 @@ pub fn prepare(a: &ModelArgs, photo: &Path) -> Result<Prepared, CliError> {
             w
         }
     };
-    let facts = sweepmtf::photo::exif::read_facts(photo).unwrap_or_default();
     let source = match a.model.as_deref() {
         None => None,
         Some("auto") => {
             if facts.f_number.is_none() {
                 return Err(CliError::usage(format!(
-                    "--model auto: {} has no usable EXIF f-number, so diffraction cannot be \
-                     placed; give --model SYSTEM.toml instead",
-                    photo.display()
+                    "--model auto: {name} has no usable EXIF f-number, so diffraction cannot be \
+                     placed; give --model SYSTEM.toml instead"
                 )));
             }
             Some(ModelSource::Auto)

@@ -6,10 +6,11 @@ use clap::{Parser, Subcommand};
 mod batch;
 mod chart;
 mod exit;
-mod factors;
-mod measure;
-mod measure_flags;
-mod measure_model;
+pub(crate) mod factors;
+mod gui;
+pub(crate) mod measure;
+pub(crate) mod measure_flags;
+pub(crate) mod measure_model;
 mod messages;
 mod model;
 mod simulate;
@@ -45,6 +46,8 @@ enum Command {
     Model(model::Args),
     /// Render a target through a modelled camera, with the exact truth.
     Simulate(simulate::Args),
+    /// Open a local page to measure by hand and explore the model.
+    Gui(gui::Args),
 }
 
 /// Parses the command line, runs the subcommand and returns the exit code.
@@ -72,6 +75,7 @@ pub fn main() -> std::process::ExitCode {
         Command::Merge(a) => batch::run_merge(a),
         Command::Model(a) => model::run(a),
         Command::Simulate(a) => simulate::run(a),
+        Command::Gui(a) => gui::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

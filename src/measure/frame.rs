@@ -27,22 +27,33 @@ pub(super) fn decode_with_pitch(
     name: &str,
     opts: &MeasureOptions,
 ) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
-    let name = name.to_string();
-    let bytes = std::fs::read(path).map_err(|source| MeasureError {
-        path: name.clone(),
+    decode_bytes_with_pitch(&read_photo(path, name)?, name, opts)
+}
+
+/// Reads a photo file's bytes (`name` in the error).
+pub(super) fn read_photo(path: &Path, name: &str) -> Result<Vec<u8>, MeasureError> {
+    std::fs::read(path).map_err(|source| MeasureError {
+        path: name.to_string(),
         failure: DecodeError::Io {
-            path: name.clone(),
+            path: name.to_string(),
             source,
         }
         .into(),
-    })?;
-    let dec = decode_bytes_want(&bytes, &name, jpeg_want(opts)).map_err(|e| MeasureError {
-        path: name.clone(),
+    })
+}
+
+/// [`decode_with_pitch`] of a photo file's bytes already in memory.
+pub(super) fn decode_bytes_with_pitch(
+    bytes: &[u8],
+    name: &str,
+    opts: &MeasureOptions,
+) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
+    let dec = decode_bytes_want(bytes, name, jpeg_want(opts)).map_err(|e| MeasureError {
+        path: name.to_string(),
         failure: e.into(),
     })?;
-    let facts = crate::photo::exif::facts_from_bytes(&bytes);
-    let damage = crate::photo::jpeg_check::scan_damage(&bytes);
-    drop(bytes);
+    let facts = crate::photo::exif::facts_from_bytes(bytes);
+    let damage = crate::photo::jpeg_check::scan_damage(bytes);
     let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
     let o = MeasureOptions {
         pixel_pitch_mm: pitch.pitch_mm,

@@ -5,7 +5,7 @@
 //! targets give one result per patch ([`patches`]).
 //!
 //! Entry points: [`measure_file`] (decode + measure; safe to call from many
-//! threads), [`measure_decoded`] and [`measure_planes`] (for planes that
+//! threads), [`measure_bytes`] (the same for a file's bytes in memory), [`measure_decoded`] and [`measure_planes`] (for planes that
 //! another decoder, e.g. camera raw, produced).
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
@@ -47,7 +47,9 @@ pub use lens_fit::{DistortionFound, DistortionSource};
 pub use patches::PatchResult;
 pub use region::{rect_strip, target_homography};
 
-use frame::{decode_with_pitch, measure_decoded_at, measure_frame_at};
+use frame::{
+    decode_bytes_with_pitch, decode_with_pitch, measure_decoded_at, measure_frame_at, read_photo,
+};
 use profile::BinOptions;
 use region::{
     bbox_crop, found_said, full_grey, locate_region, location_failed, raw_read_window,
@@ -353,8 +355,21 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
     if crate::photo::raw::is_raw_path(path) {
         return measure_raw(path, &name, target.as_ref(), opts);
     }
-    let (dec, o, said) = decode_with_pitch(path, &name, opts)?;
-    let mut m = measure_decoded(&dec, &name, target.as_ref(), &o).map_err(|e| said.blame(e))?;
+    measure_bytes(&read_photo(path, &name)?, &name, target.as_ref(), opts)
+}
+
+/// Measures a photo file (JPEG, PNG or TIFF, not a raw) whose bytes are
+/// already in memory, exactly as [`measure_file`] measures it from disk
+/// (same decoding, EXIF pixel pitch and warnings); `name` is used in
+/// messages and the outputs, `target` stands for `opts.target`.
+pub fn measure_bytes(
+    bytes: &[u8],
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+) -> Result<Measurement, MeasureError> {
+    let (dec, o, said) = decode_bytes_with_pitch(bytes, name, opts)?;
+    let mut m = measure_decoded(&dec, name, target, &o).map_err(|e| said.blame(e))?;
     said.add_to(&mut m);
     Ok(m)
 }

@@ -11,6 +11,7 @@ mod frame;
 mod greens;
 mod guard;
 mod ljpeg;
+mod tiff_bounds;
 
 pub use decode::{
     RAW_EXTENSIONS, RawError, decode_raw, decode_raw_with_rawler, decode_raw_within, is_raw_path,

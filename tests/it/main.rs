@@ -3,6 +3,7 @@
 
 mod batch_stub;
 mod csv_support;
+mod gui_support;
 mod locate_support;
 mod model_ref;
 mod patch_shot;
@@ -17,6 +18,9 @@ mod chart_output;
 mod chart_sinemtf;
 mod exif_jpeg;
 mod fuzz_slice;
+mod gui_api;
+mod gui_browser;
+mod gui_timing;
 mod jpeg_region;
 mod lens_mtf;
 mod locate_each_chart;

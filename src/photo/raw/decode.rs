@@ -90,10 +90,18 @@ fn open(path: &Path) -> Result<RawSource, RawError> {
             cause: "the file is empty".to_string(),
         });
     }
-    RawSource::new(path).map_err(|e| RawError::Io {
+    let src = RawSource::new(path).map_err(|e| RawError::Io {
         path: path.display().to_string(),
         cause: e.to_string(),
-    })
+    })?;
+    let buf = src.buf();
+    match super::tiff_bounds::tiff_damage(&mut std::io::Cursor::new(buf), buf.len() as u64) {
+        Some(cause) => Err(RawError::Corrupt {
+            path: path.display().to_string(),
+            cause,
+        }),
+        None => Ok(src),
+    }
 }
 
 /// Turns a rawler error into ours, naming make and model (from `facts` when rawler has none).

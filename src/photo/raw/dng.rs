@@ -162,6 +162,12 @@ fn open_dng(path: &Path) -> Result<Option<(File, u64, GenericTiffReader)>, RawEr
     if head != *b"II*\0" && head != *b"MM\0*" {
         return Ok(None);
     }
+    if let Some(cause) = super::tiff_bounds::tiff_damage(&mut &file, len) {
+        return Err(RawError::Corrupt {
+            path: path.display().to_string(),
+            cause,
+        });
+    }
     let tiff = {
         let mut reader = BufReader::with_capacity(64 << 10, &file);
         match guard::contain(|| GenericTiffReader::new(&mut reader, 0, 0, None, &[])) {
