@@ -162,11 +162,12 @@ fn open_dng(path: &Path) -> Result<Option<(File, u64, GenericTiffReader)>, RawEr
     if head != *b"II*\0" && head != *b"MM\0*" {
         return Ok(None);
     }
-    if let Some(cause) = super::tiff_bounds::tiff_damage(&mut &file, len) {
-        return Err(RawError::Corrupt {
-            path: path.display().to_string(),
-            cause,
-        });
+    // A structure rawler's parser cannot take safely is left to the whole-file
+    // path, whose opening refuses it as corrupt (see `decode::open`).
+    let damaged = super::tiff_bounds::tiff_damage(&mut &file, len).is_some();
+    (&file).seek(SeekFrom::Start(0)).map_err(io)?;
+    if damaged {
+        return Ok(None);
     }
     let tiff = {
         let mut reader = BufReader::with_capacity(64 << 10, &file);
