@@ -144,7 +144,14 @@ impl NativeMeasurement {
                 d.set_item("chart_modulation_source", &c.chart_modulation_source)?;
                 d.set_item("mtf50_cy_px", c.figures.mtf50_cy_px)?;
                 d.set_item("mtf30_cy_px", c.figures.mtf30_cy_px)?;
+                d.set_item("mtf20_cy_px", c.figures.mtf20_cy_px)?;
                 d.set_item("mtf10_cy_px", c.figures.mtf10_cy_px)?;
+                d.set_item("mtf50p_cy_px", c.figures.mtf50p_cy_px)?;
+                d.set_item("mtf20p_cy_px", c.figures.mtf20p_cy_px)?;
+                d.set_item("mtf10p_cy_px", c.figures.mtf10p_cy_px)?;
+                d.set_item("peak_mtf", c.figures.peak_mtf)?;
+                d.set_item("peak_cy_px", c.figures.peak_cy_px)?;
+                d.set_item("sharpening_peak", c.figures.sharpening_peak)?;
                 d.set_item("mtf_nyquist", c.figures.mtf_nyquist)?;
                 d.set_item("aliasing_from_cy_px", c.aliasing_from_cy_px)?;
                 d.set_item("clipped_fraction", c.clipped_fraction)?;

@@ -56,7 +56,11 @@ class Curve:
     light), ``mtf`` (modulation / chart modulation), ``mtf_err`` (one-sigma
     uncertainty of the MTF), ``aliased`` (bool: the value is not an MTF there).
 
-    Figures (cycles/pixel, None when not reached): ``mtf50``, ``mtf30``, ``mtf10``;
+    Figures (cycles/pixel, None when not reached): ``mtf50``, ``mtf30``, ``mtf20``,
+    ``mtf10`` (where the MTF falls to nn % of its low-frequency value 1);
+    ``mtf50p``, ``mtf20p``, ``mtf10p`` (nn % of the peak, searched from the peak
+    upward; equal to ``mtf50`` etc. without a sharpening peak); ``peak_mtf`` and
+    ``peak_cy_px`` (1 at 0 cy/px without sharpening), ``sharpening_peak`` (bool);
     ``mtf_nyquist`` (MTF at 0.5 cy/px).
     """
 
@@ -73,7 +77,14 @@ class Curve:
     aliased: np.ndarray
     mtf50: Optional[float]
     mtf30: Optional[float]
+    mtf20: Optional[float]
     mtf10: Optional[float]
+    mtf50p: Optional[float]
+    mtf20p: Optional[float]
+    mtf10p: Optional[float]
+    peak_mtf: Optional[float]
+    peak_cy_px: Optional[float]
+    sharpening_peak: bool
     mtf_nyquist: Optional[float]
     chart_modulation: float
     chart_modulation_source: str
@@ -118,7 +129,14 @@ class Measurement:
                     aliased=d["aliased"],
                     mtf50=d["mtf50_cy_px"],
                     mtf30=d["mtf30_cy_px"],
+                    mtf20=d["mtf20_cy_px"],
                     mtf10=d["mtf10_cy_px"],
+                    mtf50p=d["mtf50p_cy_px"],
+                    mtf20p=d["mtf20p_cy_px"],
+                    mtf10p=d["mtf10p_cy_px"],
+                    peak_mtf=d["peak_mtf"],
+                    peak_cy_px=d["peak_cy_px"],
+                    sharpening_peak=d["sharpening_peak"],
                     mtf_nyquist=d["mtf_nyquist"],
                     chart_modulation=d["chart_modulation"],
                     chart_modulation_source=d["chart_modulation_source"],

@@ -26,7 +26,14 @@ class Curve:
     aliased: npt.NDArray[np.bool_]
     mtf50: Optional[float]
     mtf30: Optional[float]
+    mtf20: Optional[float]
     mtf10: Optional[float]
+    mtf50p: Optional[float]
+    mtf20p: Optional[float]
+    mtf10p: Optional[float]
+    peak_mtf: Optional[float]
+    peak_cy_px: Optional[float]
+    sharpening_peak: bool
     mtf_nyquist: Optional[float]
     chart_modulation: float
     chart_modulation_source: str

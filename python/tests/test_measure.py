@@ -37,7 +37,7 @@ def assert_summary_matches(py_summary, cli_summary, tol=1e-12):
         assert (p["channel"], p["sweep"]) == (c["channel"], c["sweep"])
         for k in ("chart_modulation", "aliasing_from_cy_px", "clipped_fraction", "mtf_at_nyquist"):
             assert close(p[k], c[k], tol), (k, p[k], c[k])
-        for k in ("mtf50", "mtf30", "mtf10"):
+        for k in ("mtf50", "mtf30", "mtf20", "mtf10", "mtf50p", "mtf20p", "mtf10p"):
             pv, cv = p[k], c[k]
             assert (pv is None) == (cv is None), k
             if pv is not None:
@@ -58,6 +58,8 @@ def test_path_gives_the_cli_result(cli_run):
     # The curve's figures are the summary's.
     c0 = m.curves[0]
     assert close(c0.mtf50, cli_summary["curves"][0]["mtf50"]["cy_px"])
+    assert close(c0.mtf50p, cli_summary["curves"][0]["mtf50p"]["cy_px"])
+    assert c0.sharpening_peak == cli_summary["curves"][0]["peak"]["sharpening"]
     assert m.warnings == cli_summary["warnings"]
 
 

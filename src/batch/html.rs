@@ -107,7 +107,8 @@ td.w{{text-align:left;white-space:normal;color:#777;font-size:12px;min-width:320
     }
     h.push_str(
         "<table>\n<thead><tr><th>#</th><th class=\"l\">file</th><th class=\"l\">status</th>\
-<th>MTF50<br>cy/px</th><th>MTF50<br>cy/mm</th><th>MTF50<br>LW/PH</th><th>MTF10<br>cy/px</th>\
+<th>MTF50<br>cy/px</th><th>MTF50<br>cy/mm</th><th>MTF50<br>LW/PH</th><th>MTF20<br>cy/px</th><th>MTF10<br>cy/px</th>\
+<th>MTF50P<br>cy/px</th><th>MTF20P<br>cy/px</th><th>MTF10P<br>cy/px</th><th>peak<br>MTF</th><th>peak at<br>cy/px</th>\
 <th>MTF at<br>Nyquist</th><th class=\"l\">method</th><th>f-number</th><th>focal<br>length</th><th>ISO</th>\
 <th>exposure</th><th class=\"l\">camera</th><th class=\"l\">lens</th><th>time<br>s</th><th class=\"l\">error / warnings</th></tr></thead>\n<tbody>\n",
     );
@@ -138,7 +139,8 @@ td.w{{text-align:left;white-space:normal;color:#777;font-size:12px;min-width:320
         let _ = writeln!(
             h,
             "<tr{cls}><td>{n}</td><td class=\"l\">{file}</td><td class=\"l\">{st}</td>\
-<td>{m50}</td><td>{m50mm}</td><td>{m50lw}</td><td>{m10}</td><td>{nyq}</td><td class=\"l\">{method}</td>\
+<td>{m50}</td><td>{m50mm}</td><td>{m50lw}</td><td>{m20}</td><td>{m10}</td>\
+<td>{m50p}</td><td>{m20p}</td><td>{m10p}</td><td>{pk}</td><td>{pkf}</td><td>{nyq}</td><td class=\"l\">{method}</td>\
 <td>{fnum}</td><td>{fl}</td><td>{iso}</td><td>{exp}</td><td class=\"l\">{cam}</td><td class=\"l\">{lens}</td>\
 <td>{rt:.2}</td><td class=\"{ncls}\">{note}</td></tr>",
             cls = if r.is_ok() { "" } else { " class=\"err\"" },
@@ -147,7 +149,13 @@ td.w{{text-align:left;white-space:normal;color:#777;font-size:12px;min-width:320
             m50 = num(x.mtf50_cy_px, 4),
             m50mm = num(x.mtf50_cy_mm, 1),
             m50lw = num(x.mtf50_lw_ph, 0),
+            m20 = num(x.mtf20_cy_px, 4),
             m10 = num(x.mtf10_cy_px, 4),
+            m50p = num(x.mtf50p_cy_px, 4),
+            m20p = num(x.mtf20p_cy_px, 4),
+            m10p = num(x.mtf10p_cy_px, 4),
+            pk = num(x.mtf_peak, 3),
+            pkf = num(x.mtf_peak_cy_px, 4),
             nyq = num(x.mtf_nyquist, 3),
             method = escape(x.method.as_deref().unwrap_or("")),
             fnum = x

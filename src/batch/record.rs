@@ -16,8 +16,20 @@ pub struct ShotResult {
     pub mtf50_cy_mm: Option<f64>,
     /// MTF50 in line widths per picture height.
     pub mtf50_lw_ph: Option<f64>,
+    /// Frequency where the MTF falls to 0.2, in cycles/pixel.
+    pub mtf20_cy_px: Option<f64>,
     /// Frequency where the MTF falls to 0.1, in cycles/pixel.
     pub mtf10_cy_px: Option<f64>,
+    /// Frequency above the peak where the MTF falls to 50 % of the peak, in cycles/pixel.
+    pub mtf50p_cy_px: Option<f64>,
+    /// Frequency above the peak where the MTF falls to 20 % of the peak, in cycles/pixel.
+    pub mtf20p_cy_px: Option<f64>,
+    /// Frequency above the peak where the MTF falls to 10 % of the peak, in cycles/pixel.
+    pub mtf10p_cy_px: Option<f64>,
+    /// Peak MTF, dimensionless (1 when the curve does not rise above its low-frequency value).
+    pub mtf_peak: Option<f64>,
+    /// Frequency of the peak, in cycles/pixel (0 when the peak is the low-frequency value).
+    pub mtf_peak_cy_px: Option<f64>,
     /// MTF at the Nyquist frequency (0.5 cycles/pixel), dimensionless.
     pub mtf_nyquist: Option<f64>,
     /// Modulation estimator used (`extrema`, `fit`, `envelope`, ...).

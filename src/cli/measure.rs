@@ -66,6 +66,17 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
             },
             None => "MTF50 not reached".to_string(),
         };
+        // With a sharpening peak, MTF50P (half the peak) beside MTF50.
+        let f50p = match (c.figures.sharpening_peak, c.figures.peak_mtf) {
+            (true, Some(pk)) => {
+                let at = c.figures.peak_cy_px.unwrap_or(0.0);
+                match c.figures.mtf50p_cy_px {
+                    Some(f) => format!(", MTF50P {f:.3} cy/px (peak {pk:.3} at {at:.3} cy/px)"),
+                    None => format!(", MTF50P not reached (peak {pk:.3} at {at:.3} cy/px)"),
+                }
+            }
+            _ => String::new(),
+        };
         let nyq = c
             .figures
             .mtf_nyquist
@@ -77,7 +88,7 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
             "from target"
         };
         parts.push(format!(
-            "{tag}{f50}{nyq}, chart modulation {:.3} ({src})",
+            "{tag}{f50}{f50p}{nyq}, chart modulation {:.3} ({src})",
             c.chart_modulation
         ));
     }
@@ -215,7 +226,7 @@ pub fn outputs(
         mtf_plot_with(m, plot, &extras.plot).map_err(out_err)?,
     ));
     files.push((out("roi.png"), roi_plot::roi_plot(m).map_err(out_err)?));
-    let summary_value = extras.json(summary(m, Some(timings)));
+    let summary_value = extras.json(summary(m, Some(timings)), m);
     let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
     summary_text.push('\n');
     files.push((out("summary.json"), summary_text.into_bytes()));
@@ -223,7 +234,7 @@ pub fn outputs(
         files,
         csv_path,
         summary: summary_value,
-        line_suffix: extras.line_suffix(),
+        line_suffix: extras.line_suffix(m),
     })
 }
 

@@ -10,11 +10,13 @@ use serde_json::Value;
 use std::path::Path;
 use sweepmtf::measure::Measurement;
 use sweepmtf::measure::PatchResult;
+use sweepmtf::measure::lens_mtf::{LensCurve, SensorPart, is_sensor_factor, lens_curve};
 use sweepmtf::measure::model_overlay::{
     CurveModel, MIN_MODEL_FOR_RATIO, ModelOverlay, ModelSource, OverlayError, PatchComparison,
     compare_patches, evaluate, evaluate_patches,
 };
 use sweepmtf::photo::exif::ExifFacts;
+use sweepmtf::report::lens_mtf::{add_lens_columns, add_lens_json, lens_figures, lens_plot_curves};
 use sweepmtf::report::model_overlay::{
     PlotExtras, add_exif, add_model, add_mtf_model_column, add_patch_comparison,
     patch_comparison_text, plot_extras,
@@ -30,6 +32,11 @@ pub struct ModelArgs {
     /// Wavelength of the `auto` model's diffraction (default 550nm).
     #[arg(long, value_name = "LENGTH")]
     pub wavelength: Option<String>,
+    /// Also give the lens MTF: the MTF divided by the sensor part (the
+    /// `--model` file's aperture and OLPF factors; else a 100 % fill square
+    /// pixel); points where that divisor is below 0.2 are flagged, not given.
+    #[arg(long)]
+    pub lens_mtf: bool,
 }
 
 fn overlay_err(e: OverlayError) -> CliError {
@@ -45,6 +52,7 @@ pub struct Prepared {
     facts: ExifFacts,
     source: Option<ModelSource>,
     wavelength_mm: f64,
+    lens_mtf: bool,
 }
 
 /// Reads the EXIF facts and the model file; checks `auto` has an f-number. Runs before measuring.
@@ -87,10 +95,21 @@ pub fn prepare_with(a: &ModelArgs, facts: ExifFacts, name: &str) -> Result<Prepa
         }
         Some(file) => Some(ModelSource::from_file(Path::new(file)).map_err(overlay_err)?),
     };
+    // A model without sensor factors leaves nothing to divide by: refused before measuring.
+    if a.lens_mtf
+        && let Some(ModelSource::File { system, .. }) = &source
+        && !system.factors.iter().any(|f| is_sensor_factor(&f.name()))
+    {
+        let e = SensorPart::from_system(system.clone(), Some(1.0));
+        if let Err(e) = e {
+            return Err(CliError::usage(e.to_string()));
+        }
+    }
     Ok(Prepared {
         facts,
         source,
         wavelength_mm,
+        lens_mtf: a.lens_mtf,
     })
 }
 
@@ -105,6 +124,8 @@ pub struct Extras {
     patch_cmp: Option<(Vec<PatchResult>, PatchComparison)>,
     /// Extras for the MTF plot.
     pub plot: PlotExtras,
+    /// `--lens-mtf`: the divisor and the lens MTF of each curve.
+    lens: Option<(SensorPart, Vec<LensCurve>)>,
 }
 
 impl Prepared {
@@ -119,8 +140,22 @@ impl Prepared {
                 Some((o, cms))
             }
         };
+        let lens = if self.lens_mtf {
+            let sensor = match &self.source {
+                Some(ModelSource::File { system, .. }) => {
+                    SensorPart::from_system(system.clone(), m.pixel_pitch_mm)
+                        .map_err(|e| CliError::usage(e.to_string()))?
+                }
+                // `auto`'s sensor part is the square pixel of the pitch: the default.
+                _ => SensorPart::SquarePixel,
+            };
+            let lcs: Vec<LensCurve> = m.curves.iter().map(|c| lens_curve(c, &sensor)).collect();
+            Some((sensor, lcs))
+        } else {
+            None
+        };
         let has_facts = !self.facts.describe().is_empty();
-        let plot = plot_extras(
+        let mut plot = plot_extras(
             model.as_ref().map(|(o, c)| (o, c.as_slice())),
             has_facts.then_some(&self.facts),
             m,
@@ -130,12 +165,16 @@ impl Prepared {
             .map(|(o, _)| evaluate_patches(m, o))
             .unwrap_or_default();
         let patch_cmp = compare_patches(&m.patches, &patch_model).map(|c| (m.patches.clone(), c));
+        if let Some((_, lcs)) = &lens {
+            plot.lens_curves = lens_plot_curves(m, lcs);
+        }
         Ok(Extras {
             facts: self.facts.clone(),
             model,
             patch_model,
             patch_cmp,
             plot,
+            lens,
         })
     }
 }
@@ -143,8 +182,12 @@ impl Prepared {
 impl Extras {
     /// The curves CSV with `mtf_model` added when a model is given.
     pub fn csv(&self, bytes: Vec<u8>) -> Vec<u8> {
-        match &self.model {
+        let bytes = match &self.model {
             Some((_, cms)) => add_mtf_model_column(&bytes, cms),
+            None => bytes,
+        };
+        match &self.lens {
+            Some((_, lcs)) => add_lens_columns(&bytes, lcs),
             None => bytes,
         }
     }
@@ -159,8 +202,11 @@ impl Extras {
     }
 
     /// The JSON summary with `exif` and, with a model, `model` and the MTF50 ratios.
-    pub fn json(&self, mut v: Value) -> Value {
+    pub fn json(&self, mut v: Value, m: &Measurement) -> Value {
         add_exif(&mut v, &self.facts);
+        if let Some((s, lcs)) = &self.lens {
+            add_lens_json(&mut v, m, s, lcs);
+        }
         if let Some((o, cms)) = &self.model {
             add_model(&mut v, o, cms);
             if let Some((ps, c)) = &self.patch_cmp {
@@ -172,7 +218,23 @@ impl Extras {
 
     /// Text appended to the summary line: the model's MTF50 and the ratio per
     /// sweep, and for sine patches the median and furthest measured/model.
-    pub fn line_suffix(&self) -> String {
+    pub fn line_suffix(&self, m: &Measurement) -> String {
+        let lens = match &self.lens {
+            Some((_, lcs)) => lcs
+                .iter()
+                .enumerate()
+                .map(|(i, l)| match lens_figures(m, i, l).mtf50_cy_px {
+                    Some(f) => format!(" | lens MTF50 {f:.3} cy/px"),
+                    None => " | lens MTF50 not reached".to_string(),
+                })
+                .collect::<String>(),
+            None => String::new(),
+        };
+        format!("{}{lens}", self.model_suffix())
+    }
+
+    /// The model's part of [`Extras::line_suffix`].
+    fn model_suffix(&self) -> String {
         let Some((o, cms)) = &self.model else {
             return String::new();
         };

@@ -331,6 +331,7 @@ pub fn save(s: &Server, v: Value) -> Reply {
     let none = ModelArgs {
         model: None,
         wavelength: None,
+        lens_mtf: false,
     };
     let written = prepare_with(&none, j.photo.facts.clone(), &j.photo.name).and_then(|prepared| {
         std::fs::create_dir_all(&out).map_err(|e| {

@@ -2,11 +2,13 @@
 //! sweep law and the strip's local scale, aliasing flags (frequency outside
 //! the sampling lattice's band in the sweep's direction, or the image's local
 //! frequency departing from the law), normalisation by the chart's own
-//! modulation, and the summary figures (MTF50/30/10, MTF at Nyquist).
+//! modulation; the summary figures are in [`super::figures`].
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 use serde::{Deserialize, Serialize};
+
+pub use super::figures::{Figures, crossing, figures, mtf_at};
 
 /// One point of a measured MTF curve.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -25,19 +27,6 @@ pub struct MtfPoint {
     pub mtf_err: f64,
     /// True where the frequency is aliased: the value is not an MTF.
     pub aliased: bool,
-}
-
-/// Summary figures of one curve (cycles/pixel).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct Figures {
-    /// Frequency where the MTF first falls to 0.5.
-    pub mtf50_cy_px: Option<f64>,
-    /// Frequency where the MTF first falls to 0.3.
-    pub mtf30_cy_px: Option<f64>,
-    /// Frequency where the MTF first falls to 0.1.
-    pub mtf10_cy_px: Option<f64>,
-    /// MTF at the Nyquist frequency, 0.5 cycles/pixel (None when not measured or aliased there).
-    pub mtf_nyquist: Option<f64>,
 }
 
 /// The sampling lattice of the planes binned together for one curve, as far
@@ -295,46 +284,6 @@ pub(crate) fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> 
         }
     }
     Some([r[0] / a[0][0], r[1] / a[1][1], r[2] / a[2][2]])
-}
-
-/// The frequency where the (non-aliased) curve first falls through `level`, by linear interpolation.
-pub fn crossing(points: &[MtfPoint], level: f64) -> Option<f64> {
-    let pts: Vec<&MtfPoint> = points.iter().filter(|p| !p.aliased).collect();
-    // Smooth lightly (3-point running mean) so one noisy point does not decide.
-    let sm: Vec<f64> = (0..pts.len())
-        .map(|i| {
-            let a = i.saturating_sub(1);
-            let b = (i + 2).min(pts.len());
-            pts[a..b].iter().map(|p| p.mtf).sum::<f64>() / (b - a) as f64
-        })
-        .collect();
-    for i in 1..pts.len() {
-        if sm[i - 1] >= level && sm[i] < level {
-            let t = (sm[i - 1] - level) / (sm[i - 1] - sm[i]);
-            return Some(pts[i - 1].freq_cy_px + t * (pts[i].freq_cy_px - pts[i - 1].freq_cy_px));
-        }
-    }
-    None
-}
-
-/// The (non-aliased) MTF at frequency `f`, by linear interpolation; None outside the measured range.
-pub fn mtf_at(points: &[MtfPoint], f: f64) -> Option<f64> {
-    let pts: Vec<&MtfPoint> = points.iter().filter(|p| !p.aliased).collect();
-    pts.windows(2).find_map(|w| {
-        let (a, b) = (w[0], w[1]);
-        (a.freq_cy_px <= f && f <= b.freq_cy_px && b.freq_cy_px > a.freq_cy_px)
-            .then(|| a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px))
-    })
-}
-
-/// MTF50, MTF30, MTF10 and MTF at Nyquist of a curve.
-pub fn figures(points: &[MtfPoint]) -> Figures {
-    Figures {
-        mtf50_cy_px: crossing(points, 0.5),
-        mtf30_cy_px: crossing(points, 0.3),
-        mtf10_cy_px: crossing(points, 0.1),
-        mtf_nyquist: mtf_at(points, 0.5),
-    }
 }
 
 #[cfg(test)]

@@ -22,9 +22,11 @@ use thiserror::Error;
 
 pub mod curve;
 pub mod estimate;
+pub mod figures;
 pub mod in_memory;
 pub mod law;
 pub mod lens_fit;
+pub mod lens_mtf;
 pub mod model_overlay;
 pub mod patches;
 pub mod profile;

@@ -208,11 +208,7 @@ pub(super) fn measure_strip(
             !near.is_empty() && near.iter().sum::<f64>() / near.len() as f64 > 0.05
         })
     };
-    for fig in [
-        &mut figures.mtf50_cy_px,
-        &mut figures.mtf30_cy_px,
-        &mut figures.mtf10_cy_px,
-    ] {
+    for fig in figures.crossings_mut() {
         if noisy_at(*fig) {
             *fig = None;
         }

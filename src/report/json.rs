@@ -1,5 +1,7 @@
-//! The JSON summary of a measurement: MTF50/30/10 in every known unit, MTF at
-//! Nyquist, method, chart modulation and its source, warnings, timings.
+//! The JSON summary of a measurement: MTF50/30/20/10 and MTF50P/20P/10P (nn %
+//! of the peak, searched from the peak upward) in every known unit, the peak
+//! (value, frequency, whether it is a sharpening peak), MTF at Nyquist,
+//! method, chart modulation and its source, warnings, timings.
 
 use super::csv::lw_ph;
 use crate::measure::Measurement;
@@ -38,7 +40,16 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                 "sweep": c.sweep_id,
                 "mtf50": freq(c.figures.mtf50_cy_px, m),
                 "mtf30": freq(c.figures.mtf30_cy_px, m),
+                "mtf20": freq(c.figures.mtf20_cy_px, m),
                 "mtf10": freq(c.figures.mtf10_cy_px, m),
+                "mtf50p": freq(c.figures.mtf50p_cy_px, m),
+                "mtf20p": freq(c.figures.mtf20p_cy_px, m),
+                "mtf10p": freq(c.figures.mtf10p_cy_px, m),
+                "peak": {
+                    "mtf": c.figures.peak_mtf,
+                    "freq": freq(c.figures.peak_cy_px, m),
+                    "sharpening": c.figures.sharpening_peak,
+                },
                 "mtf_at_nyquist": c.figures.mtf_nyquist,
                 "chart_modulation": c.chart_modulation,
                 "chart_modulation_err": c.chart_modulation_err,

@@ -3,6 +3,7 @@
 pub mod atomic;
 pub mod csv;
 pub mod json;
+pub mod lens_mtf;
 pub mod model_cut;
 pub mod model_io;
 pub mod model_map;

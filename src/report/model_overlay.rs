@@ -42,6 +42,8 @@ pub struct PlotExtras {
     pub patch_marks: Vec<PatchMark>,
     /// A caption line under the plot (EXIF facts), empty for none.
     pub caption: String,
+    /// Lens MTF curves (`--lens-mtf`), drawn solid in dark orange.
+    pub lens_curves: Vec<ModelCurve>,
 }
 
 /// Plot extras: one dashed model curve per distinct sweep direction (0–1 cy/px),
@@ -104,6 +106,7 @@ pub fn plot_extras(
         model_curves: curves,
         patch_marks,
         caption: caption.join("  ·  "),
+        lens_curves: Vec::new(),
     }
 }
 
@@ -315,6 +318,33 @@ pub fn draw_model_curves<'a, DB: DrawingBackend + 'a>(
                     + PathElement::new([(0, 0), (7, 0)], style)
                     + PathElement::new([(11, 0), (18, 0)], style)
             });
+    }
+    Ok(())
+}
+
+/// Draws the lens MTF curves (`--lens-mtf`) solid, dark orange then lighter, with small dots.
+pub fn draw_lens_curves<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    extras: &PlotExtras,
+    xmax: f64,
+    ymax: f64,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    for (k, lc) in extras.lens_curves.iter().enumerate() {
+        let col = if k == 0 {
+            RGBColor(200, 90, 0)
+        } else {
+            RGBColor(235, 160, 90)
+        };
+        let pts: Vec<(f64, f64)> = lc
+            .points
+            .iter()
+            .filter(|p| p.0 <= xmax && p.1.is_finite())
+            .map(|&(f, v)| (f, v.clamp(0.0, ymax)))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts, col.stroke_width(2)))?
+            .label(lc.label.clone())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], col.stroke_width(2)));
     }
     Ok(())
 }

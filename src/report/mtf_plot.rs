@@ -1,6 +1,7 @@
 //! The MTF plot: each curve with its ±1σ error band (several colour channels
 //! in their own hues, lighter for each further sweep), aliased points in grey,
-//! the Nyquist frequency and MTF50 marked; sine patches as points with error
+//! the Nyquist frequency and MTF50 marked (with a sharpening peak, the peak
+//! and MTF50P too, when MTF50P differs from MTF50); sine patches as points with error
 //! bars; with a model, dashed model curves and a hollow ring at each patch's
 //! model value. PNG or SVG.
 
@@ -130,8 +131,15 @@ where
         .iter()
         .flat_map(|c| c.points.iter().filter(|p| !p.aliased).map(|p| p.mtf))
         .chain(m.patches.iter().map(|p| p.mtf))
-        .fold(1.05, f64::max)
-        .min(1.6);
+        .chain(
+            extras
+                .lens_curves
+                .iter()
+                .flat_map(|c| c.points.iter().map(|p| p.1)),
+        )
+        .fold(1.05, f64::max);
+    // Room above a sharpening peak for its label.
+    let ymax = if ymax > 1.05 { ymax + 0.1 } else { ymax }.min(1.6);
     let name = std::path::Path::new(&m.source)
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -251,8 +259,10 @@ where
                 )))
                 .map_err(err)?;
         }
+        draw_peak_marks(&mut chart, c, col, k, ymax)?;
     }
     super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
+    super::model_overlay::draw_lens_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     if !m.patches.is_empty() {
         let col = RGBColor(230, 120, 20);
         // Patches beyond the axis (aliased, far above Nyquist) are left off rather than pinned to its edge.
@@ -300,6 +310,74 @@ where
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperRight)
         .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// Smallest |MTF50P − MTF50| (cy/px) for which MTF50P gets its own mark.
+const MTF50P_MARK_MIN: f64 = 0.002;
+
+/// With a sharpening peak: an open circle at the peak, and a filled diamond at
+/// (MTF50P, half the peak) with its label above, when MTF50P differs from MTF50.
+fn draw_peak_marks<DB: DrawingBackend>(
+    chart: &mut ChartContext<
+        '_,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    c: &crate::measure::Curve,
+    col: RGBColor,
+    k: usize,
+    ymax: f64,
+) -> Result<(), ReportError>
+where
+    DB::ErrorType: 'static,
+{
+    let g = &c.figures;
+    let (true, Some(pk), Some(fpk), Some(f50p)) =
+        (g.sharpening_peak, g.peak_mtf, g.peak_cy_px, g.mtf50p_cy_px)
+    else {
+        return Ok(());
+    };
+    if g.mtf50_cy_px
+        .is_some_and(|f50| (f50 - f50p).abs() < MTF50P_MARK_MIN)
+    {
+        return Ok(());
+    }
+    let font = (crate::plot::FONT, 15).into_font().color(&col);
+    let half = 0.5 * pk;
+    chart
+        .draw_series([
+            PathElement::new([(f50p, 0.0), (f50p, half)], col.mix(0.7).stroke_width(1)),
+            PathElement::new([(fpk, half), (f50p, half)], col.mix(0.7).stroke_width(1)),
+        ])
+        .map_err(err)?;
+    chart
+        .draw_series(std::iter::once(Circle::new(
+            (fpk, pk.min(ymax)),
+            5,
+            col.stroke_width(2),
+        )))
+        .map_err(err)?;
+    chart
+        .draw_series(std::iter::once(
+            EmptyElement::at((f50p, half))
+                + Polygon::new(vec![(0, -6), (6, 0), (0, 6), (-6, 0)], col.filled()),
+        ))
+        .map_err(err)?;
+    chart
+        .draw_series([
+            Text::new(
+                format!("MTF50P = {f50p:.3} cy/px"),
+                (f50p + 0.01, (half + 0.05 + 0.05 * k as f64).min(ymax)),
+                font.clone(),
+            ),
+            Text::new(
+                format!("peak {pk:.3} at {fpk:.3} cy/px"),
+                (fpk + 0.01, (pk + 0.04).min(ymax - 0.02)),
+                font,
+            ),
+        ])
         .map_err(err)?;
     Ok(())
 }

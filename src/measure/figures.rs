@@ -1,0 +1,269 @@
+//! The summary figures of one MTF curve: MTFnn (where the curve first falls
+//! to nn % of its low-frequency value, 1 after normalisation), MTFnnP (where
+//! it first falls to nn % of its *peak*, searching upward from the peak),
+//! the peak itself, and the MTF at Nyquist.
+//!
+//! Both kinds of crossing use the same convention: the non-aliased points,
+//! lightly smoothed (3-point running mean, so one noisy point does not
+//! decide), the first fall through the level, linear interpolation between
+//! the two points around it. The peak is the largest smoothed value. Without
+//! sharpening the curve's largest value is its low-frequency 1 (a peak that
+//! does not rise above 1 by more than [`PEAK_SIGMAS`] times its uncertainty
+//! and [`PEAK_FLOOR`] is noise): the peak is then taken as 1 at 0 cy/px and
+//! MTFnnP equals MTFnn exactly.
+
+use super::curve::MtfPoint;
+use serde::{Deserialize, Serialize};
+
+/// Summary figures of one curve (frequencies in cycles/pixel; None where not reached).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Figures {
+    /// Frequency where the MTF first falls to 0.5 (cy/px).
+    pub mtf50_cy_px: Option<f64>,
+    /// Frequency where the MTF first falls to 0.3 (cy/px).
+    pub mtf30_cy_px: Option<f64>,
+    /// Frequency where the MTF first falls to 0.2 (cy/px).
+    pub mtf20_cy_px: Option<f64>,
+    /// Frequency where the MTF first falls to 0.1 (cy/px).
+    pub mtf10_cy_px: Option<f64>,
+    /// MTF at the Nyquist frequency, 0.5 cycles/pixel (None when not measured or aliased there).
+    pub mtf_nyquist: Option<f64>,
+    /// Peak MTF (dimensionless): the largest smoothed value, or 1 when the curve does not rise above 1 beyond its noise.
+    pub peak_mtf: Option<f64>,
+    /// Frequency of the peak (cy/px; 0 when the peak is the low-frequency 1).
+    pub peak_cy_px: Option<f64>,
+    /// True when the curve rises above its low-frequency value beyond its noise (sharpening).
+    pub sharpening_peak: bool,
+    /// Frequency above the peak where the MTF first falls to 50 % of the peak (cy/px).
+    pub mtf50p_cy_px: Option<f64>,
+    /// Frequency above the peak where the MTF first falls to 20 % of the peak (cy/px).
+    pub mtf20p_cy_px: Option<f64>,
+    /// Frequency above the peak where the MTF first falls to 10 % of the peak (cy/px).
+    pub mtf10p_cy_px: Option<f64>,
+}
+
+/// A peak counts as sharpening only when it exceeds 1 by this many times its one-sigma uncertainty.
+pub const PEAK_SIGMAS: f64 = 3.0;
+/// … and by at least this much (dimensionless; estimator bias of noiseless curves).
+pub const PEAK_FLOOR: f64 = 0.002;
+
+/// The non-aliased points with their 3-point running means of MTF and of its uncertainty.
+fn smoothed(points: &[MtfPoint]) -> (Vec<&MtfPoint>, Vec<f64>, Vec<f64>) {
+    let pts: Vec<&MtfPoint> = points
+        .iter()
+        .filter(|p| !p.aliased && p.mtf.is_finite() && p.freq_cy_px.is_finite())
+        .collect();
+    let mean = |g: &dyn Fn(&MtfPoint) -> f64| -> Vec<f64> {
+        (0..pts.len())
+            .map(|i| {
+                let a = i.saturating_sub(1);
+                let b = (i + 2).min(pts.len());
+                pts[a..b].iter().map(|p| g(p)).sum::<f64>() / (b - a) as f64
+            })
+            .collect()
+    };
+    let sm = mean(&|p| p.mtf);
+    let err = mean(&|p| p.mtf_err.abs());
+    (pts, sm, err)
+}
+
+/// The first fall of the smoothed curve `sm` through `level` at or after index `from`, interpolated linearly.
+fn fall_from(pts: &[&MtfPoint], sm: &[f64], from: usize, level: f64) -> Option<f64> {
+    for i in (from + 1).max(1)..pts.len() {
+        if sm[i - 1] >= level && sm[i] < level {
+            let t = (sm[i - 1] - level) / (sm[i - 1] - sm[i]);
+            return Some(pts[i - 1].freq_cy_px + t * (pts[i].freq_cy_px - pts[i - 1].freq_cy_px));
+        }
+    }
+    None
+}
+
+/// The frequency where the (non-aliased) curve first falls through `level`, by linear interpolation.
+pub fn crossing(points: &[MtfPoint], level: f64) -> Option<f64> {
+    let (pts, sm, _) = smoothed(points);
+    fall_from(&pts, &sm, 0, level)
+}
+
+/// The (non-aliased) MTF at frequency `f`, by linear interpolation; None outside the measured range.
+pub fn mtf_at(points: &[MtfPoint], f: f64) -> Option<f64> {
+    let pts: Vec<&MtfPoint> = points.iter().filter(|p| !p.aliased).collect();
+    pts.windows(2).find_map(|w| {
+        let (a, b) = (w[0], w[1]);
+        (a.freq_cy_px <= f && f <= b.freq_cy_px && b.freq_cy_px > a.freq_cy_px)
+            .then(|| a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px))
+    })
+}
+
+/// The peak of a curve: (value, frequency cy/px, index into the smoothed points
+/// to search from, whether it is a sharpening peak); None without points.
+fn peak(pts: &[&MtfPoint], sm: &[f64], err: &[f64]) -> Option<(f64, f64, usize, bool)> {
+    let i = (0..sm.len()).max_by(|&a, &b| sm[a].total_cmp(&sm[b]))?;
+    // The smoothed point's uncertainty (neighbours share data: not divided by √3).
+    let sig = err[i];
+    if sm[i] > 1.0 + (PEAK_SIGMAS * sig).max(PEAK_FLOOR) {
+        Some((sm[i], pts[i].freq_cy_px, i, true))
+    } else {
+        Some((1.0, 0.0, 0, false))
+    }
+}
+
+/// MTF50/30/20/10, the peak and MTF50P/20P/10P, and the MTF at Nyquist of a curve.
+pub fn figures(points: &[MtfPoint]) -> Figures {
+    let (pts, sm, err) = smoothed(points);
+    let at = |level: f64| fall_from(&pts, &sm, 0, level);
+    let pk = peak(&pts, &sm, &err);
+    let at_p = |frac: f64| pk.and_then(|(v, _, i, _)| fall_from(&pts, &sm, i, frac * v));
+    Figures {
+        mtf50_cy_px: at(0.5),
+        mtf30_cy_px: at(0.3),
+        mtf20_cy_px: at(0.2),
+        mtf10_cy_px: at(0.1),
+        mtf_nyquist: mtf_at(points, 0.5),
+        peak_mtf: pk.map(|p| p.0),
+        peak_cy_px: pk.map(|p| p.1),
+        sharpening_peak: pk.is_some_and(|p| p.3),
+        mtf50p_cy_px: at_p(0.5),
+        mtf20p_cy_px: at_p(0.2),
+        mtf10p_cy_px: at_p(0.1),
+    }
+}
+
+impl Figures {
+    /// The crossing figures, each with its label ("MTF50", "MTF50P", …), for output tables.
+    pub fn crossings(&self) -> [(&'static str, Option<f64>); 7] {
+        [
+            ("MTF50", self.mtf50_cy_px),
+            ("MTF30", self.mtf30_cy_px),
+            ("MTF20", self.mtf20_cy_px),
+            ("MTF10", self.mtf10_cy_px),
+            ("MTF50P", self.mtf50p_cy_px),
+            ("MTF20P", self.mtf20p_cy_px),
+            ("MTF10P", self.mtf10p_cy_px),
+        ]
+    }
+
+    /// Mutable references to every crossing figure (for leaving out noisy ones).
+    pub fn crossings_mut(&mut self) -> [&mut Option<f64>; 7] {
+        [
+            &mut self.mtf50_cy_px,
+            &mut self.mtf30_cy_px,
+            &mut self.mtf20_cy_px,
+            &mut self.mtf10_cy_px,
+            &mut self.mtf50p_cy_px,
+            &mut self.mtf20p_cy_px,
+            &mut self.mtf10p_cy_px,
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(f: impl Fn(f64) -> f64, err: f64) -> Vec<MtfPoint> {
+        (0..200)
+            .map(|i| {
+                let fr = 0.005 + i as f64 * 0.0025;
+                MtfPoint {
+                    s: i as f64,
+                    freq_cy_px: fr,
+                    freq_chart: fr,
+                    modulation: f(fr),
+                    mtf: f(fr),
+                    mtf_err: err,
+                    aliased: fr > 0.5,
+                }
+            })
+            .collect()
+    }
+
+    /// A tent peaking at 1.2 at 0.1 cy/px, then falling linearly to 0 at 0.45:
+    /// crossings by hand on the straight parts (the 3-point mean is exact there).
+    #[test]
+    fn peak_and_crossings_by_hand() {
+        let tent = |f: f64| {
+            if f <= 0.1 {
+                1.0 + 2.0 * f
+            } else {
+                (1.2 * (0.45 - f) / 0.35).max(0.0)
+            }
+        };
+        let g = figures(&curve(tent, 0.001));
+        assert!(g.sharpening_peak);
+        // The peak's 3-point mean sits just under the tent's corner.
+        assert!((g.peak_mtf.unwrap() - 1.2).abs() < 0.005, "{g:?}");
+        assert!((g.peak_cy_px.unwrap() - 0.1).abs() < 0.003, "{g:?}");
+        // Falling part: 1.2 (0.45 − f)/0.35 = L → f = 0.45 − 0.35 L / 1.2.
+        let fall = |l: f64| 0.45 - 0.35 * l / 1.2;
+        assert!((g.mtf50_cy_px.unwrap() - fall(0.5)).abs() < 1e-9);
+        assert!((g.mtf20_cy_px.unwrap() - fall(0.2)).abs() < 1e-9);
+        let p = g.peak_mtf.unwrap();
+        assert!((g.mtf50p_cy_px.unwrap() - fall(0.5 * p)).abs() < 1e-9);
+        assert!((g.mtf20p_cy_px.unwrap() - fall(0.2 * p)).abs() < 1e-9);
+        assert!((g.mtf10p_cy_px.unwrap() - fall(0.1 * p)).abs() < 1e-9);
+        // Half a peak above 1 is reached earlier than 0.5.
+        assert!(g.mtf50p_cy_px.unwrap() < g.mtf50_cy_px.unwrap());
+    }
+
+    /// No sharpening: the peak is the low-frequency 1 and MTFnnP is MTFnn, bit for bit.
+    #[test]
+    fn unsharpened_curve_gives_mtf50p_equal_to_mtf50() {
+        let g = figures(&curve(|f| (-12.0 * f * f).exp(), 0.002));
+        assert!(!g.sharpening_peak);
+        assert_eq!((g.peak_mtf, g.peak_cy_px), (Some(1.0), Some(0.0)));
+        assert_eq!(g.mtf50p_cy_px, g.mtf50_cy_px);
+        assert_eq!(g.mtf20p_cy_px, g.mtf20_cy_px);
+        assert_eq!(g.mtf10p_cy_px, g.mtf10_cy_px);
+        assert!(g.mtf50_cy_px.is_some());
+    }
+
+    /// The peak at the first point: a sweep starting above the sharpening peak.
+    #[test]
+    fn peak_at_the_first_point() {
+        let g = figures(&curve(|f| 1.3 - 2.0 * f, 0.001));
+        assert!(g.sharpening_peak);
+        // First smoothed value: mean of the first two points.
+        let want = 1.3 - 2.0 * (0.005 + 0.00125);
+        assert!((g.peak_mtf.unwrap() - want).abs() < 1e-12, "{g:?}");
+        assert!((g.peak_cy_px.unwrap() - 0.005).abs() < 1e-12);
+        let f50p = (1.3 - 0.5 * want) / 2.0;
+        assert!((g.mtf50p_cy_px.unwrap() - f50p).abs() < 1e-9, "{g:?}");
+        assert!((g.mtf50_cy_px.unwrap() - 0.4).abs() < 1e-9);
+    }
+
+    /// A curve that stays above 10 % of its peak: MTF10P (and MTF10) absent, not a wrong number.
+    #[test]
+    fn never_falling_to_10_percent_of_the_peak_gives_none() {
+        let g = figures(&curve(|f| 1.15 * (-2.0 * f * f).exp(), 0.001));
+        assert!(g.sharpening_peak);
+        assert!(g.mtf10p_cy_px.is_none() && g.mtf10_cy_px.is_none());
+        assert!(g.mtf20p_cy_px.is_none() && g.mtf50p_cy_px.is_none());
+        // And an empty curve has no figures at all.
+        let e = figures(&[]);
+        assert_eq!(e, Figures::default());
+    }
+
+    /// A flat curve at 1 with ±0.02 noise (honest error bars): no peak, no crossings.
+    #[test]
+    fn flat_noisy_curve_has_no_peak_and_no_crossings() {
+        let mut st = 12345u64;
+        let mut noise = || {
+            st = st
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            // Uniform on ±√3·0.02: standard deviation 0.02.
+            ((st >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * 0.02 * 3f64.sqrt()
+        };
+        let pts: Vec<MtfPoint> = curve(|_| 1.0, 0.02)
+            .into_iter()
+            .map(|mut p| {
+                p.mtf += noise();
+                p
+            })
+            .collect();
+        let g = figures(&pts);
+        assert!(!g.sharpening_peak, "{g:?}");
+        assert_eq!(g.peak_mtf, Some(1.0));
+        assert!(g.crossings().iter().all(|(_, f)| f.is_none()), "{g:?}");
+    }
+}
