@@ -14,7 +14,7 @@ use crate::distortion::{Lens, Ptlens};
 use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_file};
-use crate::photo::linearise::{Channel, Crop, default_tone, planes};
+use crate::photo::linearise::{Channel, Crop, file_tone, planes};
 use crate::target::{Target, TargetError};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -524,7 +524,7 @@ pub fn measure_decoded(
             if opts.refine_roi {
                 // Only the region and the search band around it are converted.
                 let crop = bbox_crop(&given, dec.width, dec.height, REFINE_SEARCH_PX + 8.0);
-                let grey = planes(dec, crop, &default_tone(dec.bits()).0, Channel::Luma);
+                let grey = planes(dec, crop, &file_tone(dec).0, Channel::Luma);
                 let refined = refine_or_keep(&grey[0], given, target, &mut said);
                 seen = grey.into_iter().next().map(|p| (crop, p));
                 refined
