@@ -355,7 +355,23 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
     if crate::photo::raw::is_raw_path(path) {
         return measure_raw(path, &name, target.as_ref(), opts);
     }
-    measure_bytes(&read_photo(path, &name)?, &name, target.as_ref(), opts)
+    // The compressed bytes are dropped once decoded (EXIF and the scan check
+    // read them first): a 24 MP JPEG's ≈ 10 MB need not live through the measurement.
+    let bytes = read_photo(path, &name)?;
+    let decoded = decode_bytes_with_pitch(&bytes, &name, opts)?;
+    drop(bytes);
+    measure_said(decoded, &name, target.as_ref())
+}
+
+/// Measures a decoded photo with its resolved options and what decoding said.
+fn measure_said(
+    (dec, o, said): (Decoded, MeasureOptions, Said),
+    name: &str,
+    target: Option<&Target>,
+) -> Result<Measurement, MeasureError> {
+    let mut m = measure_decoded(&dec, name, target, &o).map_err(|e| said.blame(e))?;
+    said.add_to(&mut m);
+    Ok(m)
 }
 
 /// Measures a photo file (JPEG, PNG or TIFF, not a raw) whose bytes are
@@ -368,10 +384,7 @@ pub fn measure_bytes(
     target: Option<&Target>,
     opts: &MeasureOptions,
 ) -> Result<Measurement, MeasureError> {
-    let (dec, o, said) = decode_bytes_with_pitch(bytes, name, opts)?;
-    let mut m = measure_decoded(&dec, name, target, &o).map_err(|e| said.blame(e))?;
-    said.add_to(&mut m);
-    Ok(m)
+    measure_said(decode_bytes_with_pitch(bytes, name, opts)?, name, target)
 }
 
 /// Decodes a photo and measures every chart in it: with `--target` and
