@@ -210,3 +210,27 @@ fn a_16_bit_srgb_png_is_measured_through_its_declared_curve() {
     let cm = s["curves"][0]["chart_modulation"].as_f64().unwrap();
     assert!((cm / 0.8 - 1.0).abs() < 0.005, "chart modulation {cm}");
 }
+
+/// A real camera JPEG (Nikon D70, testdata/real/exif_jpeg) embeds HP's
+/// "sRGB IEC61966-2.1" profile, whose green TRC is a 1024-entry `curv` table:
+/// read as the sRGB curve itself. The other real samples embed no profile.
+#[test]
+fn a_real_camera_jpeg_declares_srgb_through_its_icc_table() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/real/exif_jpeg");
+    let d = decode_bytes(
+        &std::fs::read(dir.join("nikon_d70_no_focalplane.jpg")).unwrap(),
+        "d70",
+    )
+    .unwrap()
+    .declared_tone
+    .expect("an ICC profile");
+    assert_eq!(d.tone, Tone::Srgb);
+    assert_eq!(d.source, "the JPEG's ICC profile");
+    for f in [
+        "canon_powershot_s40_downscaled.jpg",
+        "canon_powershot_sx60hs_hdr_NO.jpg",
+    ] {
+        let dec = decode_bytes(&std::fs::read(dir.join(f)).unwrap(), f).unwrap();
+        assert_eq!(dec.declared_tone, None, "{f}");
+    }
+}
