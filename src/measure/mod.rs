@@ -110,9 +110,8 @@ pub struct MeasureOptions {
     /// through the model.
     pub distortion: Option<Ptlens>,
     /// Without `distortion`: estimate it from the strip's straight long edges
-    /// ([`lens_fit`]) and use it when it is clearly there. Off by default: on
-    /// strips without printed edges around them (the synthetic accuracy
-    /// shots) the estimate misfires and the sweep is then not followed.
+    /// ([`lens_fit`]) and use it only when the evidence is clear (default on;
+    /// off measures as without distortion).
     pub estimate_distortion: bool,
 }
 
@@ -144,7 +143,7 @@ impl Default for MeasureOptions {
             refine_roi: false,
             green_balance: true,
             distortion: None,
-            estimate_distortion: false,
+            estimate_distortion: true,
         }
     }
 }
@@ -611,7 +610,7 @@ fn resolve_distortion(
     if !opts.estimate_distortion || target.is_some() {
         return Ok(None);
     }
-    Ok(lens_fit::estimate(&luma(), roi, size.0, size.1))
+    Ok(Some(lens_fit::estimate(&luma(), roi, size.0, size.1)))
 }
 
 /// How far beyond the region the plane for the distortion estimate reaches, px.
