@@ -123,7 +123,7 @@ pub fn table() {
         ("pincushion +4 %, estimated", 4.0, false, -300.0),
         ("pincushion +4 %, given", 4.0, true, -300.0),
         (
-            "pincushion +4 %, ignored (no --estimate-distortion)",
+            "pincushion +4 %, ignored (--no-estimate-distortion)",
             4.0,
             false,
             -300.0,

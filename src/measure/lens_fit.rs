@@ -160,6 +160,23 @@ pub fn long_edge_bow(lens: &Lens, roi: &[Point; 4]) -> f64 {
     worst
 }
 
+/// How far (px) beyond the strip's bounding box the plane given to [`estimate`]
+/// must reach: the search margin plus the largest bow of the long edges
+/// under the strongest allowed distortion of either sign.
+pub fn search_pad_px(roi: &[Point; 4], width: usize, height: usize) -> f64 {
+    let b_max = b_max(width, height);
+    let bow = [-b_max, b_max]
+        .map(|b| long_edge_bow(&Lens::new(Ptlens { a: 0.0, b, c: 0.0 }, width, height), roi));
+    20.0 + bow[0].max(bow[1])
+}
+
+/// The largest |b| (a = c = 0) allowed in a `width`×`height` image ([`MAX_CORNER_PERCENT`] at the corner).
+fn b_max(width: usize, height: usize) -> f64 {
+    let rc2 = (width as f64 / 2.0).hypot(height as f64 / 2.0).powi(2)
+        / (width.min(height) as f64 / 2.0).powi(2);
+    MAX_CORNER_PERCENT / 100.0 / (rc2 - 1.0).max(0.05)
+}
+
 /// Bilinear value of `plane` at photo point (x, y) (pixel centres at +0.5), if inside.
 fn sample(plane: &Plane, x: f64, y: f64) -> Option<f64> {
     let fx = (x - 0.5 - plane.offset.0 as f64) / plane.step.0 as f64;
@@ -327,18 +344,86 @@ fn parabola(edges: &[Vec<Point>; 2], b0: f64, h: f64, w: usize, ht: usize) -> (f
 
 /// Estimates the distortion from the long edges of the strip with photo corners
 /// `roi` (corners 1→2 and 4→3 are the long edges) in `plane` (luminance, linear;
-/// it must reach ~16 px beyond the strip). The result says whether the model
+/// it must reach [`search_pad_px`] beyond the strip's bounding box). The result says whether the model
 /// is used ([`DistortionSource::Estimated`]) or not, and why not.
 pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) -> DistortionFound {
     let mid = |a: Point, b: Point| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
     let (m0, m1) = (mid(roi[0], roi[1]), mid(roi[3], roi[2]));
     let depth = (m1[0] - m0[0]).hypot(m1[1] - m0[1]);
-    let rc2 = (width as f64 / 2.0).hypot(height as f64 / 2.0).powi(2)
-        / (width.min(height) as f64 / 2.0).powi(2);
-    let b_max = MAX_CORNER_PERCENT / 100.0 / (rc2 - 1.0).max(0.05);
-    // Edge points about the chords, then (when the edges bow) again about the
-    // curves a first fit predicts: strong distortion bends an edge far off its chord.
-    let mut lens: Option<Lens> = None;
+    let b_max = b_max(width, height);
+    let follow = |start: Option<Lens>| follow(plane, roi, depth, start, (width, height), b_max);
+    // About the chords first; when the edges are found along too little of
+    // them (a strong distortion bends them off their chords by more than the
+    // search reaches), about the curves of a ladder of models up to the
+    // largest allowed, keeping the best credible fit.
+    let mut result = follow(None);
+    let covered = |r: &Option<DistortionFound>| {
+        r.as_ref()
+            .and_then(|d| d.edge_coverage)
+            .is_some_and(|c| c >= MIN_EDGE_COVERAGE)
+    };
+    if !covered(&result) {
+        let b_step = b_max / 10.0;
+        let mut best: Option<DistortionFound> = None;
+        for k in (-10..=10).filter(|&k| k != 0) {
+            let start = Lens::new(
+                Ptlens {
+                    a: 0.0,
+                    b: k as f64 * b_step * 0.975,
+                    c: 0.0,
+                },
+                width,
+                height,
+            );
+            if start.check().is_err() {
+                continue;
+            }
+            let Some(found) = follow(Some(start)) else {
+                continue;
+            };
+            let better = best
+                .as_ref()
+                .is_none_or(|b| found.edge_coverage > b.edge_coverage);
+            if found.source == DistortionSource::Estimated && better {
+                best = Some(found);
+            }
+        }
+        if best.is_some() {
+            result = best;
+        }
+    }
+    result.unwrap_or(DistortionFound {
+        model: Ptlens {
+            a: 0.0,
+            b: 0.0,
+            c: 0.0,
+        },
+        corner_percent: 0.0,
+        source: DistortionSource::Negligible,
+        b_sigma: None,
+        edge_rms_px: None,
+        straight_rms_px: None,
+        edge_coverage: Some(0.0),
+        edge_points: 0,
+        bow_px: 0.0,
+        why_not: Some(
+            "the strip's long edges were not found (no printed edge against its surround)",
+        ),
+    })
+}
+
+/// Edge points about the curves `start` predicts (the chords without one),
+/// fitted; then (when the fit moves the edges by 2 px or more) again about
+/// the curves the fit predicts, up to three rounds.
+fn follow(
+    plane: &Plane,
+    roi: &[Point; 4],
+    depth: f64,
+    start: Option<Lens>,
+    (width, height): (usize, usize),
+    b_max: f64,
+) -> Option<DistortionFound> {
+    let mut lens = start;
     let mut result: Option<DistortionFound> = None;
     for _ in 0..3 {
         let (e0, n0) = edge_points(
@@ -355,7 +440,15 @@ pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) ->
             depth,
             lens.as_ref(),
         );
-        let Some(found) = fit_edges([e0, e1], [n0, n1], roi, width, height, b_max) else {
+        let Some(found) = fit_edges(
+            [e0, e1],
+            [n0, n1],
+            roi,
+            width,
+            height,
+            b_max,
+            lens.map_or(0.0, |l| l.model.b),
+        ) else {
             break;
         };
         let bow = found.bow_px;
@@ -384,24 +477,7 @@ pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) ->
         }
         lens = Some(next);
     }
-    result.unwrap_or(DistortionFound {
-        model: Ptlens {
-            a: 0.0,
-            b: 0.0,
-            c: 0.0,
-        },
-        corner_percent: 0.0,
-        source: DistortionSource::Negligible,
-        b_sigma: None,
-        edge_rms_px: None,
-        straight_rms_px: None,
-        edge_coverage: Some(0.0),
-        edge_points: 0,
-        bow_px: 0.0,
-        why_not: Some(
-            "the strip's long edges were not found (no printed edge against its surround)",
-        ),
-    })
+    result
 }
 
 /// RMS of the points of both edges about their own lines once undistorted by b.
@@ -419,13 +495,14 @@ fn fit_edges(
     width: usize,
     height: usize,
     b_max: f64,
+    b_start: f64,
 ) -> Option<DistortionFound> {
     if edges.iter().any(|e| e.len() < 8) {
         return None;
     }
     let mut fit = (0.0, 0.0, 0.0);
     for round in 0..2 {
-        let mut b = 0.0;
+        let mut b = b_start;
         let mut h = 0.004;
         for _ in 0..3 {
             let f = parabola(&edges, b, h, width, height);

@@ -595,7 +595,7 @@ fn given_distortion(
 }
 
 /// The distortion of a shot: as given, or estimated from the strip's edges in
-/// `luma` (a plane reaching at least [`DISTORTION_PAD_PX`] beyond the region),
+/// `luma` (a plane reaching [`lens_fit::search_pad_px`] beyond the region),
 /// or none (with a target, or when estimating is off).
 fn resolve_distortion(
     opts: &MeasureOptions,
@@ -612,9 +612,6 @@ fn resolve_distortion(
     }
     Ok(Some(lens_fit::estimate(&luma(), roi, size.0, size.1)))
 }
-
-/// How far beyond the region the plane for the distortion estimate reaches, px.
-const DISTORTION_PAD_PX: f64 = 20.0;
 
 /// [`measure_planes`] with the distortion already resolved.
 fn measure_planes_lens(

@@ -286,17 +286,23 @@ fn zero_distortion_changes_nothing() {
     assert_eq!(zero.curves[0].points.len(), b.points.len());
 }
 
-/// The strongest distortion a lens may be given with (20 % at the corner),
-/// pincushion and barrel: given, the bars hold; estimated, b is found.
+/// The strongest distortion a lens may be given with (±19.5 % at the
+/// corner, the edges bowed 37–49 px off their chords): given, the bars hold;
+/// with defaults, the estimate (searched about a ladder of models when the
+/// chords miss the edges) finds b and the bars hold too. The barrel case is
+/// shot with a smaller chart: in the bottom geometry its strip clips (7 % of
+/// the samples), which is refused as clipped (exit 5) either way.
 #[test]
 fn strongest_allowed_distortion() {
-    // +19.5 % only: at −19.5 % this geometry's simulated shot clips 7 % of the
-    // strip (refused as clipped, exit 5) — a case still to be re-shot.
-    #[allow(clippy::single_element_loop)]
-    for pct in [19.5] {
+    let smaller = Geometry {
+        chart_px: 1000.0,
+        offset: [0.0, 280.0],
+        ..BOTTOM
+    };
+    for (pct, g) in [(19.5, BOTTOM), (-19.5, smaller)] {
         let b = b_for(pct, 1200.0, 800.0);
         let model = Ptlens { a: 0.0, b, c: 0.0 };
-        let (shot, bytes) = shoot(BOTTOM, Some(model), 51);
+        let (shot, bytes) = shoot(g, Some(model), 51);
         let given = measure(
             &shot,
             &bytes,
@@ -306,21 +312,17 @@ fn strongest_allowed_distortion() {
             },
         );
         check_bars(&format!("{pct} % given"), &score(&shot, &given));
-        // Estimated: the edges bow up to ~60 px off their chords here; when the
-        // search about the chords finds too few edge points the estimate gives
-        // up (the measurement then runs without a model, and the quality gate
-        // may refuse the bowed strip, exit 5: a refusal, not a wrong answer);
-        // when it finds b, b is right.
-        match try_measure(&shot, &bytes, estimating()) {
-            Ok(est) => {
-                eprintln!("{pct} % estimated: {:?}", est.distortion.map(|d| d.note()));
-                if let Some(d) = est.distortion {
-                    assert!((d.model.b / b - 1.0).abs() < 0.05, "b {} vs {b}", d.model.b);
-                }
-            }
-            Err(e) => eprintln!("{pct} % estimated: refused ({e})"),
-        }
+        let est = measure(&shot, &bytes, MeasureOptions::default());
+        let d = est.distortion.expect("looked for");
+        eprintln!("{pct} % estimated: {}", d.note());
+        assert_eq!(d.source, DistortionSource::Estimated);
+        assert!((d.model.b / b - 1.0).abs() < 0.02, "b {} vs {b}", d.model.b);
+        check_default_bars(&format!("{pct} % estimated"), &score(&shot, &est));
     }
+    let b = b_for(-19.5, 1200.0, 800.0);
+    let (shot, bytes) = shoot(BOTTOM, Some(Ptlens { a: 0.0, b, c: 0.0 }), 51);
+    let e = try_measure(&shot, &bytes, MeasureOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("clipped"), "{e}");
 }
 
 /// A strip through the image centre: its edges are almost radial, so they
