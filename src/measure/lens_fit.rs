@@ -206,6 +206,7 @@ fn edge_points(
     (oa, ob): (Point, Point),
     depth_in: f64,
     lens: Option<&Lens>,
+    most: usize,
 ) -> (Vec<Point>, usize) {
     let len = (b[0] - a[0]).hypot(b[1] - a[1]);
     let on = |a: Point, b: Point, u: f64| -> Point {
@@ -217,7 +218,7 @@ fn edge_points(
     let h_in = (0.45 * depth_in).clamp(2.0, 16.0);
     let h_out = 12.0;
     let step = 0.25;
-    let n = ((len / 6.0) as usize).clamp(16, 400);
+    let n = ((len / 6.0) as usize).clamp(16, 400).min(most);
     // (edge point, sign of the step outside − inside)
     let mut out: Vec<(Point, bool)> = Vec::new();
     for k in 0..n {
@@ -354,8 +355,8 @@ pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) ->
     let follow = |start: Option<Lens>| follow(plane, roi, depth, start, (width, height), b_max);
     // About the chords first; when the edges are found along too little of
     // them (a strong distortion bends them off their chords by more than the
-    // search reaches), about the curves of a ladder of models up to the
-    // largest allowed, keeping the best credible fit.
+    // search reaches), about the curves of the best of a ladder of models up
+    // to the largest allowed.
     let mut result = follow(None);
     let covered = |r: &Option<DistortionFound>| {
         r.as_ref()
@@ -363,9 +364,11 @@ pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) ->
             .is_some_and(|c| c >= MIN_EDGE_COVERAGE)
     };
     if !covered(&result) {
-        let b_step = b_max / 10.0;
-        let mut best: Option<DistortionFound> = None;
-        for k in (-10..=10).filter(|&k| k != 0) {
+        // A quick probe (48 places per edge) about each model's curves picks
+        // the one along which most of both edges is found; only that one is followed.
+        let b_step = b_max / 5.0;
+        let mut best: Option<(f64, Lens)> = None;
+        for k in (-5..=5).filter(|&k| k != 0) {
             let start = Lens::new(
                 Ptlens {
                     a: 0.0,
@@ -378,18 +381,22 @@ pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) ->
             if start.check().is_err() {
                 continue;
             }
-            let Some(found) = follow(Some(start)) else {
-                continue;
+            let probe = |a: Point, b: Point, oa: Point, ob: Point| {
+                let (e, n) = edge_points(plane, (a, b), (oa, ob), depth, Some(&start), 48);
+                e.len() as f64 / n.max(1) as f64
             };
-            let better = best
-                .as_ref()
-                .is_none_or(|b| found.edge_coverage > b.edge_coverage);
-            if found.source == DistortionSource::Estimated && better {
-                best = Some(found);
+            let found =
+                probe(roi[0], roi[1], roi[3], roi[2]).min(probe(roi[3], roi[2], roi[0], roi[1]));
+            if best.as_ref().is_none_or(|b| found > b.0) {
+                best = Some((found, start));
             }
         }
-        if best.is_some() {
-            result = best;
+        if let Some((found, start)) = best
+            && found >= MIN_EDGE_COVERAGE
+            && let Some(r) = follow(Some(start))
+            && r.source == DistortionSource::Estimated
+        {
+            result = Some(r);
         }
     }
     result.unwrap_or(DistortionFound {
@@ -432,6 +439,7 @@ fn follow(
             (roi[3], roi[2]),
             depth,
             lens.as_ref(),
+            usize::MAX,
         );
         let (e1, n1) = edge_points(
             plane,
@@ -439,6 +447,7 @@ fn follow(
             (roi[0], roi[1]),
             depth,
             lens.as_ref(),
+            usize::MAX,
         );
         let Some(found) = fit_edges(
             [e0, e1],
