@@ -498,3 +498,60 @@ fn strips_without_printed_edges_are_left_alone() {
         }
     }
 }
+
+/// The command line: the estimate is the default (`--estimate-distortion`
+/// still accepted), `--no-estimate-distortion` and `--distortion none` turn it
+/// off, and a distortion outside ±20 % at the corner exits 2 with the range.
+#[test]
+fn command_line_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = b_for(-3.0, 1200.0, 800.0);
+    let (shot, bytes) = shoot(BOTTOM, Some(Ptlens { a: 0.0, b, c: 0.0 }), 95);
+    let photo = dir.path().join("shot.png");
+    std::fs::write(&photo, &bytes).unwrap();
+    let roi: Vec<String> = roi(&shot)
+        .iter()
+        .flatten()
+        .map(|v| format!("{v:.3}"))
+        .collect();
+    let run = |extra: &[&str]| {
+        let out = tempfile::tempdir().unwrap();
+        let a = assert_cmd::Command::cargo_bin("sweepmtf")
+            .unwrap()
+            .arg("measure")
+            .arg(&photo)
+            .args(["--roi", &roi.join(",")])
+            .args(extra)
+            .arg("-o")
+            .arg(out.path())
+            .assert();
+        let code = a.get_output().status.code();
+        let stderr = String::from_utf8_lossy(&a.get_output().stderr).into_owned();
+        let summary = std::fs::read(out.path().join("shot.summary.json"))
+            .ok()
+            .map(|b| serde_json::from_slice::<serde_json::Value>(&b).unwrap());
+        (code, stderr, summary)
+    };
+    for extra in [&[][..], &["--estimate-distortion"][..]] {
+        let (code, _, s) = run(extra);
+        assert_eq!(code, Some(0), "{extra:?}");
+        let d = &s.unwrap()["distortion"];
+        assert_eq!(d["source"], "estimated", "{extra:?}: {d}");
+        assert!(
+            (d["corner_percent"].as_f64().unwrap() + 3.0).abs() < 0.1,
+            "{d}"
+        );
+    }
+    for extra in [
+        &["--no-estimate-distortion"][..],
+        &["--distortion", "none"][..],
+    ] {
+        let (code, _, s) = run(extra);
+        assert_eq!(code, Some(0), "{extra:?}");
+        assert!(s.unwrap()["distortion"].is_null(), "{extra:?}");
+    }
+    let (code, stderr, s) = run(&["--distortion", "ptlens:b=0.2"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("20"), "{stderr}");
+    assert!(s.is_none());
+}
