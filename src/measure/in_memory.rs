@@ -12,7 +12,7 @@ use super::{Failure, MeasureError, MeasureOptions, Measurement, load_target, mea
 use crate::locate::Located;
 use crate::photo::decode::{Decoded, Samples, decode_file};
 use crate::photo::exif::ExifFacts;
-use crate::photo::linearise::{Crop, default_tone, planes};
+use crate::photo::linearise::{Crop, file_tone, planes};
 use crate::target::Target;
 use std::path::Path;
 
@@ -66,6 +66,7 @@ pub fn decoded_from_samples(
         format: "array",
         rows: height,
         warnings: Vec::new(),
+        declared_tone: None,
     })
 }
 
@@ -109,7 +110,7 @@ pub fn locate_in_memory(dec: &Decoded, target: &Target) -> Result<Vec<Located>, 
     let grey = planes(
         dec,
         full,
-        &default_tone(dec.bits()).0,
+        &file_tone(dec).0,
         crate::photo::linearise::Channel::Luma,
     );
     crate::locate::find_charts(&grey[0], target)
