@@ -242,7 +242,9 @@ pub(super) fn measure_decoded_at(
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
     let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
         let pad = super::lens_fit::search_pad_px(&roi, dec.width, dec.height);
-        let c = bbox_crop(&roi, dec.width, dec.height, pad);
+        let mut c = bbox_crop(&roi, dec.width, dec.height, pad);
+        // A JPEG may be decoded only down to just below the region.
+        c.y1 = c.y1.min(dec.rows).max(c.y0);
         planes(dec, c, &tone, Channel::Luma).swap_remove(0)
     })
     .map_err(err)?;
