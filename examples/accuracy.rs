@@ -61,6 +61,10 @@ fn score(shot: &SynthShot, bytes: &[u8], opts: &MeasureOptions) -> Result<Score,
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let quick = args.iter().any(|a| a == "--quick");
+    if args.iter().any(|a| a == "--distortion-only") {
+        distortion::table();
+        return;
+    }
     let cases = standard_cases();
     if let Some(i) = args.iter().position(|a| a == "--write-big") {
         // A 24-megapixel JPEG (6000×4000, quality 90) for the speed and memory check.

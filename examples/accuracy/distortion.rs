@@ -116,14 +116,15 @@ pub fn table() {
         "| distortion case (strip near the frame edge, 1200×800) | RMS error | MTF50 error % | chart modulation | b used | time ms |"
     );
     println!("|---|---|---|---|---|---|");
-    let cases: [(&str, f64, bool, f64); 6] = [
+    let cases: [(&str, f64, bool, f64); 7] = [
         ("none", 0.0, false, 300.0),
+        ("none, near the top edge", 0.0, false, -300.0),
         ("barrel −3 % at the corner, estimated", -3.0, false, 300.0),
         ("barrel −3 %, given", -3.0, true, 300.0),
         ("pincushion +4 %, estimated", 4.0, false, -300.0),
         ("pincushion +4 %, given", 4.0, true, -300.0),
         (
-            "pincushion +4 %, ignored (no --estimate-distortion)",
+            "pincushion +4 %, ignored (--no-estimate-distortion)",
             4.0,
             false,
             -300.0,

@@ -62,14 +62,17 @@ pub struct MeasureFlags {
     #[arg(long, default_value_t = 0.15, value_name = "FRACTION")]
     pub margin: f64,
     /// The lens's radial distortion in Lensfun's PTLens form, ptlens:a=A,b=B,c=C (radius 1 =
-    /// half the image's smaller side, centre = image centre). Default: estimated from the
-    /// strip's straight long edges and used when clearly there.
-    #[arg(long, value_name = "ptlens:a=A,b=B,c=C", allow_hyphen_values = true, value_parser = parse_distortion)]
+    /// half the image's smaller side, centre = image centre), or none. Default: estimated
+    /// from the strip's straight long edges and used when clearly there.
+    #[arg(long, value_name = "ptlens:a=A,b=B,c=C|none", allow_hyphen_values = true, value_parser = parse_distortion)]
     pub distortion: Option<sweepmtf::distortion::Ptlens>,
     /// Estimate lens distortion from the strip's straight printed long edges
-    /// (opt-in: on strips without clear edges around them it can misfire).
-    #[arg(long, conflicts_with = "distortion")]
+    /// (the default; kept so that older command lines still run).
+    #[arg(long, conflicts_with_all = ["distortion", "no_estimate_distortion"])]
     pub estimate_distortion: bool,
+    /// Do not estimate lens distortion: measure as without it (like --distortion none).
+    #[arg(long, conflicts_with = "distortion")]
+    pub no_estimate_distortion: bool,
     /// Estimator window in cycles (advanced).
     #[arg(long, default_value_t = 4.0, value_name = "CYCLES")]
     pub window: f64,
@@ -107,7 +110,7 @@ impl MeasureFlags {
             refine_roi: !self.no_refine_roi,
             green_balance: !self.no_green_balance,
             distortion: self.distortion,
-            estimate_distortion: self.estimate_distortion,
+            estimate_distortion: !self.no_estimate_distortion,
         })
     }
 }
@@ -125,7 +128,15 @@ pub fn parse_roi(text: &str) -> Result<[[f64; 2]; 4], String> {
     }
 }
 
+/// `ptlens:a=A,b=B,c=C`, or `none` (the zero model: no distortion, none estimated).
 fn parse_distortion(s: &str) -> Result<sweepmtf::distortion::Ptlens, String> {
+    if s.trim().eq_ignore_ascii_case("none") {
+        return Ok(sweepmtf::distortion::Ptlens {
+            a: 0.0,
+            b: 0.0,
+            c: 0.0,
+        });
+    }
     s.parse()
 }
 

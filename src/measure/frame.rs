@@ -8,7 +8,7 @@ use super::preview::{make_preview, raw_preview};
 use super::region::{bbox_crop, read_set};
 use super::tone::photo_tone;
 use super::{
-    DISTORTION_PAD_PX, Failure, MeasureError, MeasureOptions, Measurement, Said, given_distortion,
+    Failure, MeasureError, MeasureOptions, Measurement, Said, given_distortion,
     measure_planes_lens, resolve_distortion,
 };
 use crate::geometry::Point;
@@ -241,7 +241,10 @@ pub(super) fn measure_decoded_at(
         photo_tone(dec, target, opts, crop, &roi, &mut said.notes).map_err(err)?;
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
     let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
-        let c = bbox_crop(&roi, dec.width, dec.height, DISTORTION_PAD_PX);
+        let pad = super::lens_fit::search_pad_px(&roi, dec.width, dec.height);
+        let mut c = bbox_crop(&roi, dec.width, dec.height, pad);
+        // A JPEG may be decoded only down to just below the region.
+        c.y1 = c.y1.min(dec.rows).max(c.y0);
         planes(dec, c, &tone, Channel::Luma).swap_remove(0)
     })
     .map_err(err)?;

@@ -10,9 +10,15 @@
 //! b, a = c = 0: the classic cubic r_d = r_u·(1 − b + b·r_u²)) about the image
 //! centre is fitted so that the undistorted points of each edge lie on a line
 //! (least squares of the perpendicular residuals, two rounds with outliers
-//! beyond 4 robust σ dropped). The model is used only when b differs from 0 by
-//! more than 3 σ and it bends the strip's edges by at least
-//! [`MIN_BOW_PX`]; otherwise the shot is measured as without distortion.
+//! beyond 4 robust σ dropped). Only steps of the majority sign count (a
+//! printed edge is darker or lighter than its surround all along; a pattern
+//! without a printed edge flips sign with its phase). The model is used only
+//! when the evidence is clear: the edges found at ≥ [`MIN_EDGE_COVERAGE`] of
+//! the places searched on each edge, their points within [`MAX_EDGE_RMS_PX`]
+//! RMS of the undistorted lines, b more than [`MIN_SIGNIFICANCE`] standard
+//! errors from 0, a bow of at least [`MIN_BOW_PX`], and the edges' RMS about
+//! straight lines lowered [`MIN_STRAIGHTENING`]× by the model; otherwise the
+//! shot is measured as without distortion and the note says why.
 //!
 //! What the edges cannot see: a strip through the image centre has radial
 //! edges, straight under any radial distortion; its local frequency still
@@ -25,6 +31,14 @@ use serde::Serialize;
 
 /// Smallest bow (px) of the strip's edges for which an estimated distortion is used.
 pub const MIN_BOW_PX: f64 = 0.1;
+/// Least fraction of the places searched along each long edge where the edge must be found.
+pub const MIN_EDGE_COVERAGE: f64 = 0.6;
+/// Largest RMS (px) of the edge points about their undistorted lines for the edges to count as printed edges.
+pub const MAX_EDGE_RMS_PX: f64 = 0.5;
+/// Least |b| in standard errors of the edge fit for an estimated distortion to be used.
+pub const MIN_SIGNIFICANCE: f64 = 5.0;
+/// Least factor by which the model must lower the edges' RMS about straight lines.
+pub const MIN_STRAIGHTENING: f64 = 1.5;
 
 /// Where the distortion used came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -51,10 +65,16 @@ pub struct DistortionFound {
     pub b_sigma: Option<f64>,
     /// RMS distance of the undistorted edge points from their lines, px (None when given).
     pub edge_rms_px: Option<f64>,
+    /// RMS distance of the same edge points from straight lines without any model, px (None when given).
+    pub straight_rms_px: Option<f64>,
+    /// Smaller of the two long edges' fractions of places where the edge was found (None when given).
+    pub edge_coverage: Option<f64>,
     /// Edge points the estimate used (0 when given).
     pub edge_points: usize,
     /// Largest bow of the strip's long edges in the photo under this model, px.
     pub bow_px: f64,
+    /// Why an estimated model is not used (None when used or given).
+    pub why_not: Option<&'static str>,
 }
 
 impl DistortionFound {
@@ -78,19 +98,28 @@ impl DistortionFound {
                 self.corner_percent
             ),
             DistortionSource::Estimated => format!(
-                "lens distortion estimated from the strip's edges: ptlens:b={:.5} ± {:.5} ({:+.2} % at the frame corner, edges bowed {:.2} px, {} edge points, RMS {:.3} px); iso-phase lines and frequencies follow it",
+                "lens distortion estimated from the strip's edges: ptlens:b={:.5} ± {:.5} ({:+.2} % at the frame corner, edges bowed {:.2} px, {} edge points, RMS {:.3} px straight → {:.3} px with it); iso-phase lines and frequencies follow it (--no-estimate-distortion to measure without)",
                 m.b,
                 self.b_sigma.unwrap_or(0.0),
                 self.corner_percent,
                 self.bow_px,
                 self.edge_points,
+                self.straight_rms_px.unwrap_or(0.0),
                 self.edge_rms_px.unwrap_or(0.0)
             ),
+            DistortionSource::Negligible if self.edge_points == 0 => format!(
+                "lens distortion: none applied ({})",
+                self.why_not.unwrap_or("not found")
+            ),
             DistortionSource::Negligible => format!(
-                "lens distortion from the strip's edges negligible (b = {:.5} ± {:.5}, edges bowed {:.2} px): none applied",
+                "lens distortion: none applied (from the strip's edges b = {:.5} ± {:.5}, edges bowed {:.2} px, RMS {:.3} px straight, {:.3} px with it, {:.0} % of the edges found: {})",
                 m.b,
                 self.b_sigma.unwrap_or(0.0),
-                self.bow_px
+                self.bow_px,
+                self.straight_rms_px.unwrap_or(0.0),
+                self.edge_rms_px.unwrap_or(0.0),
+                100.0 * self.edge_coverage.unwrap_or(0.0),
+                self.why_not.unwrap_or("negligible")
             ),
         }
     }
@@ -105,8 +134,11 @@ pub fn given(model: Ptlens, roi: &[Point; 4], width: usize, height: usize) -> Di
         source: DistortionSource::Given,
         b_sigma: None,
         edge_rms_px: None,
+        straight_rms_px: None,
+        edge_coverage: None,
         edge_points: 0,
         bow_px: long_edge_bow(&lens, roi),
+        why_not: None,
     }
 }
 
@@ -126,6 +158,23 @@ pub fn long_edge_bow(lens: &Lens, roi: &[Point; 4]) -> f64 {
         }
     }
     worst
+}
+
+/// How far (px) beyond the strip's bounding box the plane given to [`estimate`]
+/// must reach: the search margin plus the largest bow of the long edges
+/// under the strongest allowed distortion of either sign.
+pub fn search_pad_px(roi: &[Point; 4], width: usize, height: usize) -> f64 {
+    let b_max = b_max(width, height);
+    let bow = [-b_max, b_max]
+        .map(|b| long_edge_bow(&Lens::new(Ptlens { a: 0.0, b, c: 0.0 }, width, height), roi));
+    20.0 + bow[0].max(bow[1])
+}
+
+/// The largest |b| (a = c = 0) allowed in a `width`×`height` image ([`MAX_CORNER_PERCENT`] at the corner).
+fn b_max(width: usize, height: usize) -> f64 {
+    let rc2 = (width as f64 / 2.0).hypot(height as f64 / 2.0).powi(2)
+        / (width.min(height) as f64 / 2.0).powi(2);
+    MAX_CORNER_PERCENT / 100.0 / (rc2 - 1.0).max(0.05)
 }
 
 /// Bilinear value of `plane` at photo point (x, y) (pixel centres at +0.5), if inside.
@@ -157,7 +206,8 @@ fn edge_points(
     (oa, ob): (Point, Point),
     depth_in: f64,
     lens: Option<&Lens>,
-) -> Vec<Point> {
+    most: usize,
+) -> (Vec<Point>, usize) {
     let len = (b[0] - a[0]).hypot(b[1] - a[1]);
     let on = |a: Point, b: Point, u: f64| -> Point {
         let (ua, ub) = lens.map_or((a, b), |l| (l.undistort(a), l.undistort(b)));
@@ -168,8 +218,9 @@ fn edge_points(
     let h_in = (0.45 * depth_in).clamp(2.0, 16.0);
     let h_out = 12.0;
     let step = 0.25;
-    let n = ((len / 6.0) as usize).clamp(16, 400);
-    let mut out = Vec::new();
+    let n = ((len / 6.0) as usize).clamp(16, 400).min(most);
+    // (edge point, sign of the step outside − inside)
+    let mut out: Vec<(Point, bool)> = Vec::new();
     for k in 0..n {
         let u = 0.04 + 0.92 * (k as f64 + 0.5) / n as f64;
         let c = at(u);
@@ -230,10 +281,19 @@ fn edge_points(
             && d > -0.8 * h_in
             && d < 0.8 * h_out
         {
-            out.push([c[0] - d * inward[0], c[1] - d * inward[1]]);
+            out.push(([c[0] - d * inward[0], c[1] - d * inward[1]], step_h > 0.0));
         }
     }
-    out
+    // A printed edge has one sign of step all along (the strip darker or
+    // lighter than its surround); the pattern itself flips sign with its phase.
+    let up = out.iter().filter(|p| p.1).count();
+    let major = up * 2 >= out.len();
+    let pts = out
+        .into_iter()
+        .filter(|p| p.1 == major)
+        .map(|p| p.0)
+        .collect();
+    (pts, n)
 }
 
 /// Sum of squared perpendicular residuals of points about their least-squares line.
@@ -285,44 +345,121 @@ fn parabola(edges: &[Vec<Point>; 2], b0: f64, h: f64, w: usize, ht: usize) -> (f
 
 /// Estimates the distortion from the long edges of the strip with photo corners
 /// `roi` (corners 1→2 and 4→3 are the long edges) in `plane` (luminance, linear;
-/// it must reach ~16 px beyond the strip). `None` when too few edge points are found.
-pub fn estimate(
-    plane: &Plane,
-    roi: &[Point; 4],
-    width: usize,
-    height: usize,
-) -> Option<DistortionFound> {
+/// it must reach [`search_pad_px`] beyond the strip's bounding box). The result says whether the model
+/// is used ([`DistortionSource::Estimated`]) or not, and why not.
+pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) -> DistortionFound {
     let mid = |a: Point, b: Point| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
     let (m0, m1) = (mid(roi[0], roi[1]), mid(roi[3], roi[2]));
     let depth = (m1[0] - m0[0]).hypot(m1[1] - m0[1]);
-    let rc2 = (width as f64 / 2.0).hypot(height as f64 / 2.0).powi(2)
-        / (width.min(height) as f64 / 2.0).powi(2);
-    let b_max = MAX_CORNER_PERCENT / 100.0 / (rc2 - 1.0).max(0.05);
-    // Edge points about the chords, then (when the edges bow) again about the
-    // curves a first fit predicts: strong distortion bends an edge far off its chord.
-    let mut lens: Option<Lens> = None;
-    let mut result = None;
+    let b_max = b_max(width, height);
+    let follow = |start: Option<Lens>| follow(plane, roi, depth, start, (width, height), b_max);
+    // About the chords first; when the edges are found along too little of
+    // them (a strong distortion bends them off their chords by more than the
+    // search reaches), about the curves of the best of a ladder of models up
+    // to the largest allowed.
+    let mut result = follow(None);
+    let covered = |r: &Option<DistortionFound>| {
+        r.as_ref()
+            .and_then(|d| d.edge_coverage)
+            .is_some_and(|c| c >= MIN_EDGE_COVERAGE)
+    };
+    if !covered(&result) {
+        // A quick probe (48 places per edge) about each model's curves picks
+        // the one along which most of both edges is found; only that one is followed.
+        let b_step = b_max / 5.0;
+        let mut best: Option<(f64, Lens)> = None;
+        for k in (-5..=5).filter(|&k| k != 0) {
+            let start = Lens::new(
+                Ptlens {
+                    a: 0.0,
+                    b: k as f64 * b_step * 0.975,
+                    c: 0.0,
+                },
+                width,
+                height,
+            );
+            if start.check().is_err() {
+                continue;
+            }
+            let probe = |a: Point, b: Point, oa: Point, ob: Point| {
+                let (e, n) = edge_points(plane, (a, b), (oa, ob), depth, Some(&start), 48);
+                e.len() as f64 / n.max(1) as f64
+            };
+            let found =
+                probe(roi[0], roi[1], roi[3], roi[2]).min(probe(roi[3], roi[2], roi[0], roi[1]));
+            if best.as_ref().is_none_or(|b| found > b.0) {
+                best = Some((found, start));
+            }
+        }
+        if let Some((found, start)) = best
+            && found >= MIN_EDGE_COVERAGE
+            && let Some(r) = follow(Some(start))
+            && r.source == DistortionSource::Estimated
+        {
+            result = Some(r);
+        }
+    }
+    result.unwrap_or(DistortionFound {
+        model: Ptlens {
+            a: 0.0,
+            b: 0.0,
+            c: 0.0,
+        },
+        corner_percent: 0.0,
+        source: DistortionSource::Negligible,
+        b_sigma: None,
+        edge_rms_px: None,
+        straight_rms_px: None,
+        edge_coverage: Some(0.0),
+        edge_points: 0,
+        bow_px: 0.0,
+        why_not: Some(
+            "the strip's long edges were not found (no printed edge against its surround)",
+        ),
+    })
+}
+
+/// Edge points about the curves `start` predicts (the chords without one),
+/// fitted; then (when the fit moves the edges by 2 px or more) again about
+/// the curves the fit predicts, up to three rounds.
+fn follow(
+    plane: &Plane,
+    roi: &[Point; 4],
+    depth: f64,
+    start: Option<Lens>,
+    (width, height): (usize, usize),
+    b_max: f64,
+) -> Option<DistortionFound> {
+    let mut lens = start;
+    let mut result: Option<DistortionFound> = None;
     for _ in 0..3 {
-        let edges = [
-            edge_points(
-                plane,
-                (roi[0], roi[1]),
-                (roi[3], roi[2]),
-                depth,
-                lens.as_ref(),
-            ),
-            edge_points(
-                plane,
-                (roi[3], roi[2]),
-                (roi[0], roi[1]),
-                depth,
-                lens.as_ref(),
-            ),
-        ];
-        let Some(found) = fit_edges(edges, roi, width, height, b_max) else {
-            return result;
+        let (e0, n0) = edge_points(
+            plane,
+            (roi[0], roi[1]),
+            (roi[3], roi[2]),
+            depth,
+            lens.as_ref(),
+            usize::MAX,
+        );
+        let (e1, n1) = edge_points(
+            plane,
+            (roi[3], roi[2]),
+            (roi[0], roi[1]),
+            depth,
+            lens.as_ref(),
+            usize::MAX,
+        );
+        let Some(found) = fit_edges(
+            [e0, e1],
+            [n0, n1],
+            roi,
+            width,
+            height,
+            b_max,
+            lens.map_or(0.0, |l| l.model.b),
+        ) else {
+            break;
         };
-        let next = Lens::new(found.model, width, height);
         let bow = found.bow_px;
         let moved = lens.map_or(bow, |l: Lens| {
             let nb = Lens::new(
@@ -336,8 +473,15 @@ pub fn estimate(
             );
             long_edge_bow(&nb, roi)
         });
+        let next = Lens::new(found.model, width, height);
+        // Search about the predicted curves only when this fit is a real one.
+        let credible = found.edge_rms_px.is_some_and(|r| r <= MAX_EDGE_RMS_PX)
+            && found
+                .b_sigma
+                .is_some_and(|s| found.model.b.abs() > MIN_SIGNIFICANCE * s)
+            && next.check().is_ok();
         result = Some(found);
-        if moved < 2.0 {
+        if moved < 2.0 || !credible {
             break;
         }
         lens = Some(next);
@@ -345,20 +489,29 @@ pub fn estimate(
     result
 }
 
-/// Fits b to the edge points of both long edges (see the module's text).
+/// RMS of the points of both edges about their own lines once undistorted by b.
+fn rms_about_lines(edges: &[Vec<Point>; 2], b: f64, width: usize, height: usize) -> f64 {
+    let n: usize = edges.iter().map(|e| e.len()).sum();
+    (cost(edges, b, width, height) / n.max(1) as f64).sqrt()
+}
+
+/// Fits b to the edge points of both long edges (see the module's text);
+/// `places` is how many places along each edge were searched.
 fn fit_edges(
     mut edges: [Vec<Point>; 2],
+    places: [usize; 2],
     roi: &[Point; 4],
     width: usize,
     height: usize,
     b_max: f64,
+    b_start: f64,
 ) -> Option<DistortionFound> {
     if edges.iter().any(|e| e.len() < 8) {
         return None;
     }
     let mut fit = (0.0, 0.0, 0.0);
     for round in 0..2 {
-        let mut b = 0.0;
+        let mut b = b_start;
         let mut h = 0.004;
         for _ in 0..3 {
             let f = parabola(&edges, b, h, width, height);
@@ -399,21 +552,45 @@ fn fit_edges(
     } else {
         f64::INFINITY
     };
+    let coverage = edges
+        .iter()
+        .zip(places)
+        .map(|(e, n)| e.len() as f64 / n.max(1) as f64)
+        .fold(1.0, f64::min);
+    let rms_b = rms_about_lines(&edges, b, width, height);
+    let rms0 = rms_about_lines(&edges, 0.0, width, height);
     let model = Ptlens { a: 0.0, b, c: 0.0 };
     let lens = Lens::new(model, width, height);
     let bow = long_edge_bow(&lens, roi);
-    let used = b.abs() > 3.0 * b_sigma && bow >= MIN_BOW_PX && lens.check().is_ok();
+    let why_not = if coverage < MIN_EDGE_COVERAGE {
+        Some("the long edges were found along too little of the strip")
+    } else if rms_b > MAX_EDGE_RMS_PX {
+        Some("the edge points scatter too much to be printed edges")
+    } else if !(b.abs() > MIN_SIGNIFICANCE * b_sigma) {
+        Some("b is within the edge fit's noise")
+    } else if bow < MIN_BOW_PX {
+        Some("it bends the strip's edges too little to matter")
+    } else if !(rms0 >= MIN_STRAIGHTENING * rms_b) {
+        Some("it does not straighten the edges clearly")
+    } else if lens.check().is_err() {
+        Some("the fitted model is outside what a lens can have")
+    } else {
+        None
+    };
     Some(DistortionFound {
         model,
         corner_percent: lens.corner_percent(),
-        source: if used {
+        source: if why_not.is_none() {
             DistortionSource::Estimated
         } else {
             DistortionSource::Negligible
         },
         b_sigma: Some(b_sigma),
-        edge_rms_px: Some(sigma2.sqrt()),
+        edge_rms_px: Some(rms_b),
+        straight_rms_px: Some(rms0),
+        edge_coverage: Some(coverage),
         edge_points: n,
         bow_px: bow,
+        why_not,
     })
 }

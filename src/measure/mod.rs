@@ -110,9 +110,8 @@ pub struct MeasureOptions {
     /// through the model.
     pub distortion: Option<Ptlens>,
     /// Without `distortion`: estimate it from the strip's straight long edges
-    /// ([`lens_fit`]) and use it when it is clearly there. Off by default: on
-    /// strips without printed edges around them (the synthetic accuracy
-    /// shots) the estimate misfires and the sweep is then not followed.
+    /// ([`lens_fit`]) and use it only when the evidence is clear (default on;
+    /// off measures as without distortion).
     pub estimate_distortion: bool,
 }
 
@@ -144,7 +143,7 @@ impl Default for MeasureOptions {
             refine_roi: false,
             green_balance: true,
             distortion: None,
-            estimate_distortion: false,
+            estimate_distortion: true,
         }
     }
 }
@@ -609,7 +608,7 @@ fn given_distortion(
 }
 
 /// The distortion of a shot: as given, or estimated from the strip's edges in
-/// `luma` (a plane reaching at least [`DISTORTION_PAD_PX`] beyond the region),
+/// `luma` (a plane reaching [`lens_fit::search_pad_px`] beyond the region),
 /// or none (with a target, or when estimating is off).
 fn resolve_distortion(
     opts: &MeasureOptions,
@@ -624,11 +623,8 @@ fn resolve_distortion(
     if !opts.estimate_distortion || target.is_some() {
         return Ok(None);
     }
-    Ok(lens_fit::estimate(&luma(), roi, size.0, size.1))
+    Ok(Some(lens_fit::estimate(&luma(), roi, size.0, size.1)))
 }
-
-/// How far beyond the region the plane for the distortion estimate reaches, px.
-const DISTORTION_PAD_PX: f64 = 20.0;
 
 /// [`measure_planes`] with the distortion already resolved.
 fn measure_planes_lens(
