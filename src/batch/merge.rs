@@ -55,8 +55,24 @@ fn rename_output(name: &str, old: &str, new: &str) -> String {
 pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, BatchError> {
     // The output folder is held before anything is read: the inputs may be
     // the output folder itself, which another run may be writing.
+    let created = !out.exists();
     std::fs::create_dir_all(out).map_err(|e| BatchError::output(out, e))?;
-    let _lock = super::lock::FolderLock::acquire(out)?;
+    let outcome = super::lock::FolderLock::acquire(out).and_then(|lock| {
+        let r = merge_held(inputs, out);
+        drop(lock);
+        r
+    });
+    // Bad inputs leave no trace: a folder this run created is removed again
+    // (`remove_dir` removes only an empty folder, so nothing written is lost).
+    if outcome.is_err() && created {
+        let _ = std::fs::remove_file(out.join(super::lock::LOCK_FILE));
+        let _ = std::fs::remove_dir(out);
+    }
+    outcome
+}
+
+/// [`merge`] with the output folder created and locked.
+fn merge_held(inputs: &[PathBuf], out: &Path) -> Result<MergeOutcome, BatchError> {
     let mut entries: Vec<Entry> = Vec::new();
     let mut total = 0;
     for dir in inputs {

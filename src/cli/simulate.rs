@@ -107,6 +107,21 @@ pub struct Args {
     /// the frame's smaller side; b > 0 pincushion, b < 0 barrel; at most ±20 % at the corner).
     #[arg(long, value_name = "ptlens:a=A,b=B,c=C", allow_hyphen_values = true)]
     pub distortion: Option<String>,
+    /// Unsharp-mask sharpening in linear light after the noise, amount=A,radius=R (R: the
+    /// Gaussian's σ in pixels); the truth includes its gain 1 + A(1 − G).
+    #[arg(long, value_name = "amount=A,radius=R")]
+    pub sharpen: Option<String>,
+    /// Illumination gradient: the light falls by RATIO across the frame towards DEG
+    /// (0 = right, 90 = down; default 0).
+    #[arg(long, value_name = "RATIO[,DEG]", allow_hyphen_values = true)]
+    pub light_gradient: Option<String>,
+    /// Colour of the light as R,G,B gains in (0, 1] (not white-balanced): writes an RGB photo,
+    /// each channel with its own noise.
+    #[arg(long, value_name = "R,G,B")]
+    pub light_colour: Option<String>,
+    /// Chroma sampling of a colour JPEG: 420 (as most cameras), 422 or 444 (needs --light-colour).
+    #[arg(long, value_name = "420|422|444")]
+    pub chroma: Option<String>,
     /// Pixel aperture: auto (square unless the system has an aperture factor), square or none.
     #[arg(long, value_name = "KIND", default_value = "auto")]
     pub pixel_aperture: String,
@@ -220,6 +235,30 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
         .as_deref()
         .map(|d| d.parse::<sweepmtf::distortion::Ptlens>().map_err(usage))
         .transpose()?;
+    let sharpen = a
+        .sharpen
+        .as_deref()
+        .map(|v| v.parse::<simulate::Sharpen>().map_err(usage))
+        .transpose()?;
+    let light_gradient = a
+        .light_gradient
+        .as_deref()
+        .map(|v| v.parse::<simulate::LightGradient>().map_err(usage))
+        .transpose()?;
+    let light_colour = a
+        .light_colour
+        .as_deref()
+        .map(|v| simulate::nuisance::parse_colour(v).map_err(usage))
+        .transpose()?;
+    let chroma = match (&a.chroma, light_colour) {
+        (None, _) => simulate::Chroma::default(),
+        (Some(_), None) => {
+            return Err(usage(
+                "--chroma applies to a colour JPEG: give --light-colour R,G,B too",
+            ));
+        }
+        (Some(c), Some(_)) => c.parse().map_err(usage)?,
+    };
     Ok(Camera {
         width_px: w as usize,
         height_px: h as usize,
@@ -244,6 +283,10 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
         bayer,
         pixel_aperture,
         distortion,
+        sharpen,
+        light_gradient,
+        light_colour,
+        chroma,
         render: RenderSettings {
             oversample: a.oversample,
             margin_px: a.margin,

@@ -65,6 +65,7 @@ pub fn decoded_from_samples(
         format: "array",
         rows: height,
         warnings: Vec::new(),
+        declared_tone: None,
     })
 }
 

@@ -14,7 +14,7 @@ use crate::distortion::{Lens, Ptlens};
 use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_file};
-use crate::photo::linearise::{Channel, Crop, default_tone, planes};
+use crate::photo::linearise::{Channel, Crop, file_tone, planes};
 use crate::target::{Target, TargetError};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -355,7 +355,23 @@ pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, M
     if crate::photo::raw::is_raw_path(path) {
         return measure_raw(path, &name, target.as_ref(), opts);
     }
-    measure_bytes(&read_photo(path, &name)?, &name, target.as_ref(), opts)
+    // The compressed bytes are dropped once decoded (EXIF and the scan check
+    // read them first): a 24 MP JPEG's ≈ 10 MB need not live through the measurement.
+    let bytes = read_photo(path, &name)?;
+    let decoded = decode_bytes_with_pitch(&bytes, &name, opts)?;
+    drop(bytes);
+    measure_said(decoded, &name, target.as_ref())
+}
+
+/// Measures a decoded photo with its resolved options and what decoding said.
+fn measure_said(
+    (dec, o, said): (Decoded, MeasureOptions, Said),
+    name: &str,
+    target: Option<&Target>,
+) -> Result<Measurement, MeasureError> {
+    let mut m = measure_decoded(&dec, name, target, &o).map_err(|e| said.blame(e))?;
+    said.add_to(&mut m);
+    Ok(m)
 }
 
 /// Measures a photo file (JPEG, PNG or TIFF, not a raw) whose bytes are
@@ -368,10 +384,7 @@ pub fn measure_bytes(
     target: Option<&Target>,
     opts: &MeasureOptions,
 ) -> Result<Measurement, MeasureError> {
-    let (dec, o, said) = decode_bytes_with_pitch(bytes, name, opts)?;
-    let mut m = measure_decoded(&dec, name, target, &o).map_err(|e| said.blame(e))?;
-    said.add_to(&mut m);
-    Ok(m)
+    measure_said(decode_bytes_with_pitch(bytes, name, opts)?, name, target)
 }
 
 /// Decodes a photo and measures every chart in it: with `--target` and
@@ -523,7 +536,7 @@ pub fn measure_decoded(
             if opts.refine_roi {
                 // Only the region and the search band around it are converted.
                 let crop = bbox_crop(&given, dec.width, dec.height, REFINE_SEARCH_PX + 8.0);
-                let grey = planes(dec, crop, &default_tone(dec.bits()).0, Channel::Luma);
+                let grey = planes(dec, crop, &file_tone(dec).0, Channel::Luma);
                 let refined = refine_or_keep(&grey[0], given, target, &mut said);
                 seen = grey.into_iter().next().map(|p| (crop, p));
                 refined

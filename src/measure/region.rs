@@ -11,7 +11,7 @@ use crate::distortion::Lens;
 use crate::geometry::{GeometryError, Homography, Point, check_quad, rect_corners};
 use crate::photo::Plane;
 use crate::photo::decode::Decoded;
-use crate::photo::linearise::{Channel, Crop, default_tone, planes};
+use crate::photo::linearise::{Channel, Crop, file_tone, planes};
 use crate::target::{Direction, Sweep, SweepLaw, Target};
 
 /// The chart `opts.chart_index` picks in `plane` (see [`crate::locate::find_chart`]):
@@ -125,15 +125,15 @@ pub(super) fn full_grey(dec: &Decoded) -> Vec<Plane> {
         x1: dec.width,
         y1: dec.height,
     };
-    planes(dec, full, &default_tone(dec.bits()).0, Channel::Luma)
+    planes(dec, full, &file_tone(dec).0, Channel::Luma)
 }
 
-/// The photo as the chart search reads it: linear luminance (default tone, the
+/// The photo as the chart search reads it: linear luminance (the file's tone, the
 /// same values as [`full_grey`]), converted only where the search looks.
 pub(super) fn grey_source(
     dec: &Decoded,
 ) -> crate::locate::Converted<impl Fn(usize, usize, &mut [f32]) + Sync + '_> {
-    let tone = default_tone(dec.bits()).0;
+    let tone = file_tone(dec).0;
     crate::locate::Converted {
         width: dec.width,
         height: dec.height,

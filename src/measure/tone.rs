@@ -9,7 +9,7 @@ use super::{Failure, MeasureOptions};
 use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::Decoded;
-use crate::photo::linearise::{Crop, Tone, ToneCurve, default_tone, planes};
+use crate::photo::linearise::{Crop, Tone, ToneCurve, file_tone, planes};
 use crate::target::{Direction, Target};
 
 /// The tone that makes the photo's codes linear, and the summary's line for
@@ -37,11 +37,14 @@ pub(super) fn photo_tone(
     } else if let Some(g) = opts.gamma {
         Ok((Tone::Gamma(g), format!("power law, gamma {g}")))
     } else {
-        let (t, notice) = default_tone(dec.bits());
+        let (t, notice) = file_tone(dec);
         notes.extend(notice);
-        let d = match t {
-            Tone::Srgb => "sRGB curve (8-bit default)".to_string(),
-            _ => "linear (16-bit default)".to_string(),
+        let d = match (&dec.declared_tone, &t) {
+            (Some(d), Tone::Srgb) => format!("sRGB curve (from {})", d.source),
+            (Some(d), Tone::Gamma(g)) => format!("power law, gamma {g:.4} (from {})", d.source),
+            (Some(d), _) => format!("tabulated curve (from {})", d.source),
+            (None, Tone::Srgb) => "sRGB curve (8-bit default)".to_string(),
+            (None, _) => "linear (16-bit default)".to_string(),
         };
         Ok((t, d))
     }

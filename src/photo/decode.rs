@@ -73,6 +73,8 @@ pub struct Decoded {
     pub rows: usize,
     /// What the decoder had to forgive (e.g. corrupt scan data), one line each.
     pub warnings: Vec<String>,
+    /// The transfer curve the file declares (PNG chunks, ICC profile), if any.
+    pub declared_tone: Option<super::transfer::DeclaredTone>,
 }
 
 impl Decoded {
@@ -143,8 +145,15 @@ pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Dec
         ));
     }
     if format == ImageFormat::Jpeg {
-        return decode_jpeg(bytes, name, want);
+        return decode_jpeg(bytes, name, want).map(|mut d| {
+            d.declared_tone = super::transfer::jpeg(bytes);
+            d
+        });
     }
+    let declared_tone = match format {
+        ImageFormat::Png => super::transfer::png(bytes),
+        _ => super::transfer::tiff(bytes),
+    };
     let mut reader = ImageReader::new(Cursor::new(bytes));
     reader.set_format(format);
     let fail = |e: image::ImageError| match e {
@@ -191,6 +200,7 @@ pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Dec
             format: format_name,
             rows: height,
             warnings: Vec::new(),
+            declared_tone,
         });
     }
     let img = DynamicImage::from_decoder(decoder).map_err(fail)?;
@@ -218,6 +228,7 @@ pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Dec
         format: format_name,
         rows: height,
         warnings: Vec::new(),
+        declared_tone,
     })
 }
 

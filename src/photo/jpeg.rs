@@ -200,6 +200,7 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
         format: "jpeg",
         rows,
         warnings,
+        declared_tone: None,
     })
 }
 

@@ -113,6 +113,16 @@ pub fn default_tone(bits: u32) -> (Tone, Option<String>) {
     }
 }
 
+/// The tone a photo's codes are read with when none is asked for: the curve
+/// the file declares (see [`super::transfer`]), else [`default_tone`]; with
+/// the note saying which.
+pub fn file_tone(dec: &Decoded) -> (Tone, Option<String>) {
+    match &dec.declared_tone {
+        Some(d) => (d.tone.clone(), Some(format!("tone from {}", d.source))),
+        None => default_tone(dec.bits()),
+    }
+}
+
 impl Tone {
     /// Linear value of a code value scaled to 0–1.
     pub fn apply(&self, code: f64) -> f64 {
@@ -372,6 +382,7 @@ mod tests {
             format: "png",
             rows: 2,
             warnings: Vec::new(),
+            declared_tone: None,
         };
         let crop = Crop {
             x0: 1,

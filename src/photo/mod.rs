@@ -11,6 +11,7 @@ pub mod jpeg_check;
 pub mod linearise;
 pub mod pitch;
 pub mod raw;
+pub mod transfer;
 
 /// One channel of linear-light samples on a regular lattice of image pixel sites.
 ///

@@ -3,6 +3,7 @@
 //! and the renderer's accuracy settings. Serialised into every shot's JSON.
 
 use super::SimError;
+use super::nuisance::{Chroma, LightGradient, Sharpen, check_colour};
 use crate::distortion::{Lens, Ptlens};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -262,6 +263,16 @@ pub struct Camera {
     /// frame's smaller side; see [`crate::distortion`]); `None` = a perfect
     /// rectilinear lens.
     pub distortion: Option<Ptlens>,
+    /// Unsharp-mask sharpening in linear light, applied after the noise (as
+    /// cameras sharpen); `None` = none.
+    pub sharpen: Option<Sharpen>,
+    /// Illumination gradient across the frame (on top of `falloff`); `None` = even.
+    pub light_gradient: Option<LightGradient>,
+    /// Colour of the light as R, G, B gains (white balance not corrected): the
+    /// photo is then RGB, each channel with its own noise; `None` = grey.
+    pub light_colour: Option<[f64; 3]>,
+    /// Chroma sampling of a colour JPEG.
+    pub chroma: Chroma,
     /// Whether and how the pixel area is integrated.
     pub pixel_aperture: PixelAperture,
     /// Renderer accuracy settings.
@@ -295,6 +306,10 @@ impl Default for Camera {
             bayer: None,
             bayer_gains: [0.55, 1.0, 0.75],
             distortion: None,
+            sharpen: None,
+            light_gradient: None,
+            light_colour: None,
+            chroma: Chroma::default(),
             pixel_aperture: PixelAperture::Auto,
             render: RenderSettings::default(),
         }
@@ -456,6 +471,20 @@ impl Camera {
         }
         if let Some(l) = self.lens() {
             l.check().map_err(SimError::Parameter)?;
+        }
+        if let Some(sh) = &self.sharpen {
+            sh.check().map_err(SimError::Parameter)?;
+        }
+        if let Some(g) = &self.light_gradient {
+            g.check().map_err(SimError::Parameter)?;
+        }
+        if let Some(c) = &self.light_colour {
+            check_colour(c).map_err(SimError::Parameter)?;
+        }
+        if self.bayer.is_some() && (self.sharpen.is_some() || self.light_colour.is_some()) {
+            return bad("a Bayer mosaic is raw data, neither sharpened nor tinted: \
+                 leave out --sharpen and --light-colour"
+                .into());
         }
         let r = &self.render;
         if !(1..=16).contains(&r.oversample) {

@@ -4,10 +4,9 @@
 //! is one 16-bit linear channel (TIFF files also carry the TIFF/EP CFA tags),
 //! or a camera-raw DNG ([`super::dng`]).
 
-use super::{BayerOrder, Camera, SimError};
+use super::{BayerOrder, Camera, Chroma, Encoding, SimError};
 use image::ImageEncoder;
 use image::codecs::jpeg::JpegEncoder;
-use image::codecs::png::PngEncoder;
 use std::io::Cursor;
 use std::path::Path;
 
@@ -72,12 +71,6 @@ pub fn encode(camera: &Camera, linear: &[f32], format: PhotoFormat) -> Result<Ve
     let (w, h) = (camera.width_px as u32, camera.height_px as u32);
     let codes = quantise(camera, linear);
     let bytes8 = || codes.iter().map(|&c| c as u8).collect::<Vec<u8>>();
-    let bytes16 = || {
-        codes
-            .iter()
-            .flat_map(|c| c.to_ne_bytes())
-            .collect::<Vec<u8>>()
-    };
     let mut out = Vec::new();
     match format {
         PhotoFormat::Dng => return super::dng::encode(camera, linear),
@@ -93,14 +86,7 @@ pub fn encode(camera: &Camera, linear: &[f32], format: PhotoFormat) -> Result<Ve
                 .map_err(img_err)?;
         }
         PhotoFormat::Png => {
-            let (buf, ct) = if camera.stored_bits() == 8 {
-                (bytes8(), image::ExtendedColorType::L8)
-            } else {
-                (bytes16(), image::ExtendedColorType::L16)
-            };
-            PngEncoder::new(&mut out)
-                .write_image(&buf, w, h, ct)
-                .map_err(img_err)?;
+            out = png_bytes(camera, &codes, w, h, png::ColorType::Grayscale)?;
         }
         PhotoFormat::Tiff => {
             let mut cur = Cursor::new(Vec::new());
@@ -122,6 +108,105 @@ pub fn encode(camera: &Camera, linear: &[f32], format: PhotoFormat) -> Result<Ve
             out = cur.into_inner();
         }
     }
+    Ok(out)
+}
+
+/// Encodes a colour shot's recorded linear R, G, B planes (1.0 = clipping) in
+/// `format`: RGB PNG or TIFF (8 or 16 bits), or JPEG with the camera's chroma
+/// sampling (through the `jpeg-encoder` crate, which writes 4:2:0 and 4:2:2).
+pub fn encode_rgb(
+    camera: &Camera,
+    rgb: &[Vec<f32>; 3],
+    format: PhotoFormat,
+) -> Result<Vec<u8>, SimError> {
+    let (w, h) = (camera.width_px as u32, camera.height_px as u32);
+    let planes: Vec<Vec<u16>> = rgb.iter().map(|p| quantise(camera, p)).collect();
+    let n = planes[0].len();
+    let interleaved: Vec<u16> = (0..n)
+        .flat_map(|i| [planes[0][i], planes[1][i], planes[2][i]])
+        .collect();
+    let bytes8 = || interleaved.iter().map(|&c| c as u8).collect::<Vec<u8>>();
+    let eight = camera.stored_bits() == 8;
+    let mut out = Vec::new();
+    match format {
+        PhotoFormat::Dng => {
+            return Err(SimError::Parameter(
+                "a DNG holds a Bayer mosaic, not a colour image".into(),
+            ));
+        }
+        PhotoFormat::Jpeg => {
+            if !eight {
+                return Err(SimError::Parameter(
+                    "JPEG stores 8 bits: use --bits 8 or a PNG/TIFF name".into(),
+                ));
+            }
+            let (ww, hh) = (
+                u16::try_from(w).map_err(img_err)?,
+                u16::try_from(h).map_err(img_err)?,
+            );
+            let mut enc = jpeg_encoder::Encoder::new(&mut out, camera.jpeg_quality.unwrap_or(90));
+            enc.set_sampling_factor(match camera.chroma {
+                Chroma::S420 => jpeg_encoder::SamplingFactor::R_4_2_0,
+                Chroma::S422 => jpeg_encoder::SamplingFactor::R_4_2_2,
+                Chroma::S444 => jpeg_encoder::SamplingFactor::R_4_4_4,
+            });
+            enc.encode(&bytes8(), ww, hh, jpeg_encoder::ColorType::Rgb)
+                .map_err(img_err)?;
+        }
+        PhotoFormat::Png => {
+            out = png_bytes(camera, &interleaved, w, h, png::ColorType::Rgb)?;
+        }
+        PhotoFormat::Tiff => {
+            let mut cur = Cursor::new(Vec::new());
+            {
+                use tiff::encoder::{TiffEncoder, colortype};
+                let mut enc = TiffEncoder::new(&mut cur).map_err(img_err)?;
+                if eight {
+                    enc.write_image::<colortype::RGB8>(w, h, &bytes8())
+                        .map_err(img_err)?;
+                } else {
+                    enc.write_image::<colortype::RGB16>(w, h, &interleaved)
+                        .map_err(img_err)?;
+                }
+            }
+            out = cur.into_inner();
+        }
+    }
+    Ok(out)
+}
+
+/// A PNG of `codes` (grey or interleaved RGB, 8 or 16 bits as the camera
+/// stores) whose header names its transfer curve: an sRGB chunk, or a gAMA
+/// chunk for a power law or linear data, so that readers need not guess.
+fn png_bytes(
+    camera: &Camera,
+    codes: &[u16],
+    w: u32,
+    h: u32,
+    colour: png::ColorType,
+) -> Result<Vec<u8>, SimError> {
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, w, h);
+    enc.set_color(colour);
+    let eight = camera.stored_bits() == 8;
+    enc.set_depth(if eight {
+        png::BitDepth::Eight
+    } else {
+        png::BitDepth::Sixteen
+    });
+    match camera.stored_encoding() {
+        Encoding::Srgb => enc.set_source_srgb(png::SrgbRenderingIntent::RelativeColorimetric),
+        Encoding::Gamma(g) => enc.set_source_gamma(png::ScaledFloat::new((1.0 / g) as f32)),
+        Encoding::Linear => enc.set_source_gamma(png::ScaledFloat::new(1.0)),
+    }
+    let data: Vec<u8> = if eight {
+        codes.iter().map(|&c| c as u8).collect()
+    } else {
+        codes.iter().flat_map(|c| c.to_be_bytes()).collect()
+    };
+    let mut writer = enc.write_header().map_err(img_err)?;
+    writer.write_image_data(&data).map_err(img_err)?;
+    writer.finish().map_err(img_err)?;
     Ok(out)
 }
 

@@ -21,12 +21,14 @@ pub mod demo;
 pub mod dng;
 pub mod encode;
 pub mod noise;
+pub mod nuisance;
 pub mod placement;
 pub mod render;
 pub mod truth;
 
 pub use camera::{BayerOrder, Camera, Encoding, PixelAperture, RenderSettings};
 pub use encode::PhotoFormat;
+pub use nuisance::{Chroma, LightGradient, Sharpen};
 pub use truth::{PatchTruth, SweepTruth, TruthRow};
 
 use crate::geometry::{Homography, rect_corners};
@@ -75,10 +77,14 @@ pub struct Shot {
     /// Image height, pixels.
     pub height: usize,
     /// Noiseless, unclipped linear signal (1.0 = clipping), row-major; for a
-    /// mosaic, with the photosites' colour gains applied.
+    /// mosaic, with the photosites' colour gains applied; sharpened when the
+    /// camera sharpens; without the light's colour.
     pub signal: Vec<f32>,
-    /// The recorded linear image: signal with noise, clipped to [0, 1]; what is encoded.
+    /// The recorded linear image: signal with noise (then sharpened), clipped
+    /// to [0, 1]; what is encoded (for a colour shot: its green channel).
     pub linear: Vec<f32>,
+    /// A colour shot's recorded linear R, G, B planes (as `linear`); `None` = grey.
+    pub colour: Option<[Vec<f32>; 3]>,
     /// Chart (mm) → image (px) before lens distortion (see `camera.distortion`).
     pub chart_to_image: Homography,
     /// The target frame's corners (0,0),(w,0),(w,h),(0,h) in image pixels (where they land in the photo).
@@ -110,7 +116,10 @@ impl Shot {
 
     /// The photo encoded in `format`.
     pub fn encode(&self, format: PhotoFormat) -> Result<Vec<u8>, SimError> {
-        encode::encode(&self.camera, &self.linear, format)
+        match &self.colour {
+            Some(rgb) => encode::encode_rgb(&self.camera, rgb, format),
+            None => encode::encode(&self.camera, &self.linear, format),
+        }
     }
 
     /// The settings and geometry as the `STEM.json` document (`photo`: the photo's file name).
@@ -181,23 +190,27 @@ pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot,
         for (x, v) in row.iter_mut().enumerate() {
             let dx = x as f64 + 0.5 - w as f64 / 2.0;
             let mut g = camera.exposure * (1.0 - camera.falloff * (dx * dx + dy * dy) / r_corner2);
+            if let Some(lg) = &camera.light_gradient {
+                g *= lg.gain(x as f64 + 0.5, y as f64 + 0.5, w, h);
+            }
             if let Some(order) = camera.bayer {
                 g *= camera.bayer_gains[order.colour_at(x, y)];
             }
             *v = (*v as f64 * g) as f32;
         }
     });
-    let model = noise::NoiseModel {
-        full_well_e: camera.full_well_e,
-        read_noise_e: camera.read_noise_e,
-        fpn: camera.fpn,
-        fpn_seed: camera.fpn_seed,
-        seed: camera.seed,
-    };
-    let linear = noise::apply(&model, &signal, w);
+    let (linear, colour) = record(camera, &signal);
+    if let Some(sh) = &camera.sharpen {
+        sh.apply(&mut signal, w);
+    }
     let lens = camera.lens();
-    let (sweeps, patches) =
-        truth::truths(target, &placement.chart_to_image, lens.as_ref(), &optics);
+    let (sweeps, patches) = truth::truths(
+        target,
+        &placement.chart_to_image,
+        lens.as_ref(),
+        &optics,
+        camera.sharpen.as_ref(),
+    );
     let mut warnings = Vec::new();
     let band = camera.render.oversample as f64 / 2.0;
     for s in &sweeps {
@@ -223,6 +236,7 @@ pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot,
         height: h,
         signal,
         linear,
+        colour,
         chart_to_image: placement.chart_to_image,
         target_corners: truth::quad_px_lens(
             &placement.chart_to_image,
@@ -236,6 +250,43 @@ pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot,
         factors_skipped: optics.skipped(),
         warnings,
     })
+}
+
+/// The recorded linear image(s) of the noiseless `signal`: noise, sharpening
+/// (on the noisy image, as cameras do), clipping to [0, 1]; for a colour light,
+/// three channels (each scaled by its gain, with its own noise) and the green
+/// one again as the grey image.
+fn record(camera: &Camera, signal: &[f32]) -> (Vec<f32>, Option<[Vec<f32>; 3]>) {
+    let w = camera.width_px;
+    let one = |gain: f64, stream: u64| {
+        let model = noise::NoiseModel {
+            full_well_e: camera.full_well_e,
+            read_noise_e: camera.read_noise_e,
+            fpn: camera.fpn,
+            fpn_seed: camera
+                .fpn_seed
+                .wrapping_add(stream.wrapping_mul(0x9E37_79B9)),
+            seed: camera.seed.wrapping_add(stream.wrapping_mul(0x9E37_79B9)),
+        };
+        let mut out = if gain == 1.0 {
+            noise::apply_unclipped(&model, signal, w)
+        } else {
+            let tinted: Vec<f32> = signal.iter().map(|&v| (v as f64 * gain) as f32).collect();
+            noise::apply_unclipped(&model, &tinted, w)
+        };
+        if let Some(sh) = &camera.sharpen {
+            sh.apply(&mut out, w);
+        }
+        out.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0));
+        out
+    };
+    match camera.light_colour {
+        None => (one(1.0, 0), None),
+        Some([r, g, b]) => {
+            let rgb = [one(r, 1), one(g, 0), one(b, 2)];
+            (rgb[1].clone(), Some(rgb))
+        }
+    }
 }
 
 /// A small noiseless linear 16-bit shot of `target` through `system`, `width`×`height` px,

@@ -86,6 +86,13 @@ pub struct NoiseModel {
 /// Turns the noiseless signal (1.0 = clipping) into the recorded linear value:
 /// fixed-pattern gain, shot noise, read noise, then clipping to [0, 1].
 pub fn apply(model: &NoiseModel, signal: &[f32], width: usize) -> Vec<f32> {
+    let mut out = apply_unclipped(model, signal, width);
+    out.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0));
+    out
+}
+
+/// [`apply`] without the clipping (for processing before it, e.g. sharpening).
+pub fn apply_unclipped(model: &NoiseModel, signal: &[f32], width: usize) -> Vec<f32> {
     let mut out = vec![0f32; signal.len()];
     out.par_chunks_mut(width)
         .zip(signal.par_chunks(width))
@@ -105,7 +112,7 @@ pub fn apply(model: &NoiseModel, signal: &[f32], width: usize) -> Vec<f32> {
                     }
                     v = e / fw;
                 }
-                *o = v.clamp(0.0, 1.0) as f32;
+                *o = v as f32;
             }
         });
     out

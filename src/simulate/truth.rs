@@ -11,6 +11,7 @@
 //! every position is reported where it lands in the photo: distortion moves
 //! the pattern and changes its local frequency, never the OTF.
 
+use super::nuisance::Sharpen;
 use super::render::Optics;
 use crate::distortion::Lens;
 use crate::geometry::{Homography, Point};
@@ -133,7 +134,9 @@ pub fn truths(
     h: &Homography,
     lens: Option<&Lens>,
     optics: &Optics,
+    sharpen: Option<&Sharpen>,
 ) -> (Vec<SweepTruth>, Vec<PatchTruth>) {
+    let gain = |k: [f64; 2]| sharpen.map_or(1.0, |s| s.gain(k[0], k[1]));
     let pitch = optics.pitch_mm;
     let sweeps = target
         .sweeps
@@ -157,7 +160,7 @@ pub fn truths(
                     let fpx = k[0].hypot(k[1]);
                     TruthRow {
                         freq_cy_px: fpx,
-                        mtf: optics.otf_cy_px(k[0], k[1]).norm(),
+                        mtf: optics.otf_cy_px(k[0], k[1]).norm() * gain(k),
                         s_mm: s,
                         freq_cy_mm: fpx / pitch,
                         chart_freq_cy_mm: f,
@@ -185,7 +188,7 @@ pub fn truths(
                 Direction::Y => [0.0, p.freq_cy_mm],
             };
             let k = image_freq_lens(h, lens, c, g);
-            let mtf = optics.otf_cy_px(k[0], k[1]).norm();
+            let mtf = optics.otf_cy_px(k[0], k[1]).norm() * gain(k);
             PatchTruth {
                 id: p.id.clone(),
                 corners: quad_px_lens(h, lens, r.corners()),

@@ -54,6 +54,8 @@ mod readme_sample;
 mod report_patch_model;
 mod robust;
 mod simulate_cli;
+mod simulate_nuisances;
 mod simulate_output;
 mod simulate_samples;
 mod simulate_truth;
+mod tone_declared;

@@ -271,3 +271,37 @@ fn readme_sample_prints_its_summary_line_and_no_warning() {
             .is_empty()
     );
 }
+
+/// `merge` of inputs that are not batch folders fails with one line and
+/// leaves no output folder behind (it used to leave an empty one with a lock file).
+#[test]
+fn merge_of_bad_inputs_leaves_no_output_folder() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("merged");
+    let m = Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .arg("merge")
+        .arg(d.path().join("no-such-run"))
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .failure();
+    let err = stderr(&m);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!out.exists(), "merge left {}", out.display());
+    // An existing output folder is kept as it was.
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "mine").unwrap();
+    Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .arg("merge")
+        .arg(d.path().join("no-such-run"))
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .failure();
+    assert_eq!(
+        std::fs::read_to_string(out.join("keep.txt")).unwrap(),
+        "mine"
+    );
+}

@@ -2,12 +2,14 @@
 //!
 //! Around each output position s0 the bins within ±window/2 cycles of phase
 //! are fitted, with biweight weights (1 − u²)² in phase times the bin counts, by
-//! `c0 + c1·(s − s0) + a·cos 2πφ(s) + b·sin 2πφ(s)`: the linear term removes a
-//! slow illumination gradient (uneven light multiplies mean and amplitude
-//! alike, so their ratio keeps the modulation to first order; the remaining
-//! bias from the light's curvature over a long low-frequency window is
-//! ≈ 0.2 % at 3:1 with 50 % vignetting), the free (a, b) absorb any residual phase
-//! offset. The amplitude is de-biased for noise (E[a² + b²] = A² + var a +
+//! `(c0 + c1·x) + (a + a1·x)·cos 2πφ(s) + (b + b1·x)·sin 2πφ(s)`, x = s − s0.
+//! Uneven light multiplies mean and amplitude alike: the slopes c1 and
+//! (a1, b1) take its linear part out of both, so the modulation at s0,
+//! √(a² + b²)/c0, keeps no first-order bias from it. (Without the amplitude's
+//! slope, a chirp's window, symmetric in phase but not in s, read a 3:1
+//! gradient as +0.55 % chart modulation.) The same slopes absorb the MTF's own
+//! change across the window; the free (a, b) absorb any residual phase offset.
+//! The amplitude is de-biased for noise (E[a² + b²] = A² + var a +
 //! var b), so that the estimate is unbiased at low signal-to-noise ratio.
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
@@ -90,6 +92,10 @@ impl PhaseTable {
     }
 }
 
+/// Parameters of the local model: mean, its slope, and the sine's two
+/// quadratures, each with its slope.
+const N: usize = 6;
+
 /// Fits the sine at `s0` over ±`half_cycles` of phase, with biweight weights
 /// (1 − u²)² in phase (u = phase distance / half window) times the bin counts.
 pub fn local_fit(
@@ -103,7 +109,7 @@ pub fn local_fit(
     let p0 = law.phase(s0);
     let a = phases.partition_point(|&p| p < p0 - half_cycles);
     let b = phases.partition_point(|&p| p <= p0 + half_cycles);
-    if b < a + 6 {
+    if b < a + N + 2 {
         return None;
     }
     let cycles = phases[b - 1] - phases[a];
@@ -111,64 +117,63 @@ pub fn local_fit(
         return None;
     }
     let scale = (prof.s[b - 1] - prof.s[a]).max(1e-300);
-    let row = |k: usize| -> ([f64; 4], f64) {
+    let row = |k: usize| -> ([f64; N], f64) {
         let u = (phases[k] - p0) / half_cycles;
         let taper = (1.0 - u * u).max(0.0).powi(2);
-        (
-            [1.0, (prof.s[k] - s0) / scale, table.cos[k], table.sin[k]],
-            taper,
-        )
+        let x = (prof.s[k] - s0) / scale;
+        let (c, sn) = (table.cos[k], table.sin[k]);
+        ([1.0, x, c, sn, x * c, x * sn], taper)
     };
-    let mut ata = [[0.0f64; 4]; 4];
-    let mut aty = [0.0f64; 4];
+    let mut ata = [[0.0f64; N]; N];
+    let mut aty = [0.0f64; N];
     for k in a..b {
         let (x, taper) = row(k);
         let w = taper * prof.count[k];
-        for i in 0..4 {
+        for i in 0..N {
             aty[i] += w * x[i] * prof.y[k];
-            for j in i..4 {
+            for j in i..N {
                 ata[i][j] += w * x[i] * x[j];
             }
         }
     }
-    for i in 0..4 {
+    for i in 0..N {
         for j in 0..i {
             ata[i][j] = ata[j][i];
         }
     }
-    let inv = invert4(ata)?;
-    let c: Vec<f64> = (0..4)
-        .map(|i| (0..4).map(|j| inv[i][j] * aty[j]).sum())
+    let inv = invert(ata)?;
+    let c: Vec<f64> = (0..N)
+        .map(|i| (0..N).map(|j| inv[i][j] * aty[j]).sum())
         .collect();
     // Residual variance per sample, and the sandwich covariance of (a, b).
     let mut rss = 0.0;
     let mut wsum = 0.0;
-    let mut meat = [[0.0f64; 4]; 4];
+    let mut meat = [[0.0f64; N]; N];
     for k in a..b {
         let (x, taper) = row(k);
-        let pred: f64 = (0..4).map(|i| c[i] * x[i]).sum();
+        let pred: f64 = (0..N).map(|i| c[i] * x[i]).sum();
         let r = prof.y[k] - pred;
         rss += taper * prof.count[k] * r * r;
         wsum += taper;
         // Var(bin mean) = σ²/count; weight w = taper·count → w²σ²/count = taper²·count·σ².
         let q = taper * taper * prof.count[k];
-        for i in 0..4 {
-            for j in i..4 {
+        for i in 0..N {
+            for j in i..N {
                 meat[i][j] += q * x[i] * x[j];
             }
         }
     }
-    for i in 0..4 {
+    for i in 0..N {
         for j in 0..i {
             meat[i][j] = meat[j][i];
         }
     }
     let n = (b - a) as f64;
-    let sigma2 = rss / wsum.max(1e-300) * n / (n - 4.0).max(1.0);
+    let sigma2 = rss / wsum.max(1e-300) * n / (n - N as f64).max(1.0);
     let cov = |i: usize| -> f64 {
         let mut acc = 0.0;
-        for p in 0..4 {
-            for q in 0..4 {
+        for p in 0..N {
+            for q in 0..N {
                 acc += inv[i][p] * meat[p][q] * inv[q][i];
             }
         }
@@ -188,18 +193,18 @@ pub fn local_fit(
     })
 }
 
-/// Inverts a symmetric 4×4 matrix (Gauss–Jordan with pivoting, column-scaled).
-fn invert4(m: [[f64; 4]; 4]) -> Option<[[f64; 4]; 4]> {
-    let d: Vec<f64> = (0..4).map(|i| m[i][i].abs().sqrt().max(1e-300)).collect();
-    let mut a = [[0.0f64; 8]; 4];
-    for i in 0..4 {
-        for j in 0..4 {
+/// Inverts a symmetric N×N matrix (Gauss–Jordan with pivoting, column-scaled).
+fn invert<const M: usize>(m: [[f64; M]; M]) -> Option<[[f64; M]; M]> {
+    let d: Vec<f64> = (0..M).map(|i| m[i][i].abs().sqrt().max(1e-300)).collect();
+    let mut a = vec![vec![0.0f64; 2 * M]; M];
+    for i in 0..M {
+        for j in 0..M {
             a[i][j] = m[i][j] / (d[i] * d[j]);
         }
-        a[i][4 + i] = 1.0;
+        a[i][M + i] = 1.0;
     }
-    for col in 0..4 {
-        let piv = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+    for col in 0..M {
+        let piv = (col..M).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[piv][col].abs() < 1e-12 {
             return None;
         }
@@ -208,22 +213,22 @@ fn invert4(m: [[f64; 4]; 4]) -> Option<[[f64; 4]; 4]> {
         for v in a[col].iter_mut() {
             *v /= p;
         }
-        for r in 0..4 {
+        let pr = a[col].clone();
+        for (r, row) in a.iter_mut().enumerate() {
             if r != col {
-                let f = a[r][col];
+                let f = row[col];
                 if f != 0.0 {
-                    let pr = a[col];
-                    for (x, y) in a[r].iter_mut().zip(pr) {
+                    for (x, y) in row.iter_mut().zip(&pr) {
                         *x -= f * y;
                     }
                 }
             }
         }
     }
-    let mut inv = [[0.0f64; 4]; 4];
-    for i in 0..4 {
-        for j in 0..4 {
-            inv[i][j] = a[i][4 + j] / (d[i] * d[j]);
+    let mut inv = [[0.0f64; M]; M];
+    for i in 0..M {
+        for j in 0..M {
+            inv[i][j] = a[i][M + j] / (d[i] * d[j]);
         }
     }
     Some(inv)
