@@ -9,9 +9,10 @@
 
 use super::assign::{Pick, affine3};
 use super::sample::Gray;
+use super::source::Source;
 use super::{Candidate, Located};
 use crate::geometry::{Homography, Point, rect_corners};
-use crate::photo::Plane;
+use crate::photo::linearise::Crop;
 use crate::target::Target;
 
 /// Rays used for the full-resolution edge fit.
@@ -138,6 +139,20 @@ fn solve5(mut a: [[f64; 5]; 5], mut b: [f64; 5]) -> Option<[f64; 5]> {
 
 /// Edge points of a dark mark on `RAYS` rays from `e.centre` (grid units).
 pub fn edge_points(g: &Gray<'_>, e: &Ellipse) -> Vec<Point> {
+    edge_points_within(
+        g,
+        e,
+        &mut [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ],
+    )
+}
+
+/// [`edge_points`], widening `reach` (grid box [x0, y0, x1, y1]) to every place the rays may read.
+fn edge_points_within(g: &Gray<'_>, e: &Ellipse, reach: &mut [f64; 4]) -> Vec<Point> {
     let [cxx, cxy, cyy] = e.cov;
     let det = cxx * cyy - cxy * cxy;
     let mut out = Vec::with_capacity(RAYS);
@@ -152,6 +167,15 @@ pub fn edge_points(g: &Gray<'_>, e: &Ellipse) -> Vec<Point> {
         let rho = 2.0 / (ux * ux * ixx + 2.0 * ux * uy * ixy + uy * uy * iyy).sqrt();
         let step = (rho / 40.0).min(0.2);
         let m = (1.75 * rho / step).ceil() as usize + 1;
+        for t in [0.0, (m - 1) as f64 * step] {
+            let (x, y) = (e.centre[0] + t * ux, e.centre[1] + t * uy);
+            *reach = [
+                reach[0].min(x),
+                reach[1].min(y),
+                reach[2].max(x),
+                reach[3].max(y),
+            ];
+        }
         prof.clear();
         for i in 0..m {
             let t = i as f64 * step;
@@ -185,6 +209,22 @@ pub fn edge_points(g: &Gray<'_>, e: &Ellipse) -> Vec<Point> {
 
 /// Refines a mark's ellipse at full resolution (image px in, image px out).
 pub fn refine_mark(full: &Gray<'_>, centre_px: Point, cov_px2: [f64; 3]) -> Option<Ellipse> {
+    refine_mark_within(full, centre_px, cov_px2, &mut [0.0; 4])
+}
+
+/// [`refine_mark`], setting `reach` to the grid box of every place it may read.
+fn refine_mark_within(
+    full: &Gray<'_>,
+    centre_px: Point,
+    cov_px2: [f64; 3],
+    reach: &mut [f64; 4],
+) -> Option<Ellipse> {
+    *reach = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
     let s = full.scale;
     let mut e = Ellipse {
         centre: full.to_grid(centre_px),
@@ -195,7 +235,7 @@ pub fn refine_mark(full: &Gray<'_>, centre_px: Point, cov_px2: [f64; 3]) -> Opti
         ],
     };
     for _ in 0..3 {
-        let pts = edge_points(full, &e);
+        let pts = edge_points_within(full, &e, reach);
         if pts.len() < RAYS / 2 {
             return None;
         }
@@ -398,14 +438,64 @@ fn recover_near(
         .find_map(|&(_, i)| recover_mark(full, target, h, fi, Some(cands[i].centre_px)))
 }
 
+/// [`refine_mark`] reading `src` only in a window around the mark: the
+/// window is widened until every read the fit made lies inside it, so the
+/// result is the one the whole image gives.
+fn refine_in_window<S: Source + ?Sized>(
+    src: &S,
+    centre_px: Point,
+    cov_px2: [f64; 3],
+) -> Option<Ellipse> {
+    // The rays reach 3.5 σ along the mark's long axis; the fit may move and grow it.
+    let (a, c, b) = (cov_px2[0], cov_px2[2], cov_px2[1]);
+    let long = (0.5 * (a + c) + (0.25 * (a - c).powi(2) + b * b).sqrt()).max(0.0);
+    let mut half = 6.0 * long.sqrt() + 16.0;
+    let (w, h) = src.size();
+    for _ in 0..4 {
+        let lo = |v: f64| (v - half).floor().max(0.0) as usize;
+        let hi = |v: f64| (v + half).ceil().max(0.0) as usize;
+        let win = src.window(Crop {
+            x0: lo(centre_px[0]),
+            y0: lo(centre_px[1]),
+            x1: hi(centre_px[0]).min(w),
+            y1: hi(centre_px[1]).min(h),
+        });
+        let mut reach = [0.0; 4];
+        let e = refine_mark_within(&win.gray, centre_px, cov_px2, &mut reach);
+        if win.holds(reach) {
+            return e;
+        }
+        half *= 2.0;
+    }
+    refine_mark(&src.window(whole(src)).gray, centre_px, cov_px2)
+}
+
+/// The whole image of `src` as a crop.
+fn whole<S: Source + ?Sized>(src: &S) -> Crop {
+    let (w, h) = src.size();
+    Crop {
+        x0: 0,
+        y0: 0,
+        x1: w,
+        y1: h,
+    }
+}
+
 /// Full-resolution refinement of a pick; `None` when the marks cannot be measured.
-pub fn finish(plane: &Plane, target: &Target, pick: &Pick, cands: &[Candidate]) -> Option<Located> {
-    let full = Gray::of_plane(plane);
+///
+/// The marks of a full quad are read in windows around them; a hidden mark's
+/// recovery (which follows the target's edges) reads the whole image.
+pub fn finish<S: Source + ?Sized>(
+    src: &S,
+    target: &Target,
+    pick: &Pick,
+    cands: &[Candidate],
+) -> Option<Located> {
     let mut warnings = Vec::new();
     let mut marks: Vec<(usize, Point)> = Vec::new();
     for (&ci, &fi) in pick.cand_idx.iter().zip(&pick.fid_idx) {
         let c = &cands[ci];
-        match refine_mark(&full, c.centre_px, c.cov_px2) {
+        match refine_in_window(src, c.centre_px, c.cov_px2) {
             Some(e) => marks.push((fi, e.centre)),
             None => {
                 warnings.push(format!(
@@ -419,6 +509,8 @@ pub fn finish(plane: &Plane, target: &Target, pick: &Pick, cands: &[Candidate]) 
     let mut h = solve_with_correction(target, &marks, pick.homography)?;
     let mut hidden = None;
     if let Some(missing) = pick.hidden {
+        let window = src.window(whole(src));
+        let full = window.gray;
         let id = target.fiducials[missing].id.clone();
         let fixed: Vec<(Point, Point)> = marks
             .iter()

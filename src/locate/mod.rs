@@ -19,6 +19,7 @@ pub mod downscale;
 pub mod ellipse;
 pub mod refine;
 pub mod sample;
+pub mod source;
 pub mod strip_ends;
 
 use crate::geometry::{Homography, Point};
@@ -27,6 +28,7 @@ use crate::target::Target;
 use thiserror::Error;
 
 pub use debug::debug_image;
+pub use source::{Converted, Source};
 
 /// Why no chart (or no refined region) could be given.
 #[derive(Debug, Error)]
@@ -115,8 +117,11 @@ pub struct Search {
 }
 
 /// Finds every copy of `target` in the image, left to right by centre.
-pub fn find_charts(plane: &Plane, target: &Target) -> Result<Vec<Located>, LocateError> {
-    let s = search(plane, target)?;
+pub fn find_charts<S: Source + ?Sized>(
+    src: &S,
+    target: &Target,
+) -> Result<Vec<Located>, LocateError> {
+    let s = search(src, target)?;
     if s.charts.is_empty() {
         return Err(not_found(target, s.candidates));
     }
@@ -126,12 +131,12 @@ pub fn find_charts(plane: &Plane, target: &Target) -> Result<Vec<Located>, Locat
 /// Finds one chart: the only one, or the `chart_index`-th (0-based, left to right) of several.
 ///
 /// With several charts and no index, the first is returned with a warning.
-pub fn find_chart(
-    plane: &Plane,
+pub fn find_chart<S: Source + ?Sized>(
+    src: &S,
     target: &Target,
     chart_index: Option<usize>,
 ) -> Result<Located, LocateError> {
-    let mut charts = find_charts(plane, target)?;
+    let mut charts = find_charts(src, target)?;
     let n = charts.len();
     match chart_index {
         Some(i) if i >= n => Err(LocateError::NoSuchChart { index: i, found: n }),
@@ -149,15 +154,19 @@ pub fn find_chart(
 }
 
 /// Runs the search and returns what was seen, even when nothing was found.
-pub fn search(plane: &Plane, target: &Target) -> Result<Search, LocateError> {
+///
+/// `src` is a linear [`Plane`] or a photo converted on demand ([`Converted`]):
+/// the search reads a reduced image and full resolution only near the marks.
+pub fn search<S: Source + ?Sized>(src: &S, target: &Target) -> Result<Search, LocateError> {
     let nf = target.fiducials.len();
     if nf < 3 {
         return Err(LocateError::NoFiducials(nf));
     }
-    if plane.width < 16 || plane.height < 16 || plane.data.len() < plane.width * plane.height {
-        return Err(LocateError::TooSmall(plane.width, plane.height));
+    let (w, h) = src.size();
+    if w < 16 || h < 16 || !src.complete() {
+        return Err(LocateError::TooSmall(w, h));
     }
-    let small = downscale::reduce_for_search(plane);
+    let small = src.reduced();
     // The blobs and the target's pattern do not depend on each other.
     let (mut candidates, pattern) = rayon::join(
         || blobs::find_candidates(&small),
@@ -166,7 +175,7 @@ pub fn search(plane: &Plane, target: &Target) -> Result<Search, LocateError> {
     let picks = assign::choose(&small, target, &pattern, &candidates);
     let mut charts = Vec::new();
     for pick in picks {
-        if let Some(mut located) = ellipse::finish(plane, target, &pick, &candidates) {
+        if let Some(mut located) = ellipse::finish(src, target, &pick, &candidates) {
             // Re-verify under the final homography.
             let score = pattern
                 .verify(&small, &located.homography, f64::NEG_INFINITY)

@@ -12,7 +12,6 @@ use super::{Failure, MeasureError, MeasureOptions, Measurement, load_target, mea
 use crate::locate::Located;
 use crate::photo::decode::{Decoded, Samples, decode_file};
 use crate::photo::exif::ExifFacts;
-use crate::photo::linearise::{Crop, file_tone, planes};
 use crate::target::Target;
 use std::path::Path;
 
@@ -101,19 +100,7 @@ pub fn measure_in_memory(
 /// Every copy of `target` in a picture held in memory, left to right
 /// (searched on its linear luminance, default tone for its bit depth).
 pub fn locate_in_memory(dec: &Decoded, target: &Target) -> Result<Vec<Located>, Failure> {
-    let full = Crop {
-        x0: 0,
-        y0: 0,
-        x1: dec.width,
-        y1: dec.height,
-    };
-    let grey = planes(
-        dec,
-        full,
-        &file_tone(dec).0,
-        crate::photo::linearise::Channel::Luma,
-    );
-    crate::locate::find_charts(&grey[0], target)
+    crate::locate::find_charts(&super::region::grey_source(dec), target)
         .map_err(|e| Failure::Region(format!("automatic location failed: {e}")))
 }
 

@@ -52,7 +52,7 @@ use frame::{
 };
 use profile::BinOptions;
 use region::{
-    bbox_crop, found_said, full_grey, locate_region, location_failed, raw_read_window,
+    bbox_crop, found_said, full_grey, grey_source, locate_region, location_failed, raw_read_window,
     refine_or_keep, resolve_roi, strips,
 };
 use strip::measure_strip;
@@ -404,13 +404,11 @@ pub fn measure_file_each(
     };
     let target = load_target(opts).map_err(err)?.ok_or(err(Failure::NoRoi))?;
     check_options(opts).map_err(err)?;
-    let located = |plane: &Plane| {
-        crate::locate::find_charts(plane, &target).map_err(|e| err(location_failed(e)))
-    };
+    let found = |r: Result<_, _>| r.map_err(|e| err(location_failed(e)));
     if crate::photo::raw::is_raw_path(path) {
         let frame =
             crate::photo::raw::decode_raw(path).map_err(|e| err(Failure::Raw(e.to_string())))?;
-        let charts = located(&frame.location_plane())?;
+        let charts = found(crate::locate::find_charts(&frame.location_plane(), &target))?;
         let n = charts.len();
         return charts
             .iter()
@@ -423,7 +421,8 @@ pub fn measure_file_each(
             .collect();
     }
     let (dec, o, said) = decode_with_pitch(path, &name, opts)?;
-    let charts = located(&full_grey(&dec)[0]).map_err(|e| said.blame(e))?;
+    let charts = found(crate::locate::find_charts(&grey_source(&dec), &target))
+        .map_err(|e| said.blame(e))?;
     let n = charts.len();
     charts
         .iter()
@@ -530,7 +529,7 @@ pub fn measure_decoded(
     let mut seen: Option<(Crop, Plane)> = None;
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
-        (None, Some(t)) => locate_region(&full_grey(dec)[0], t, opts, &mut said).map_err(err)?,
+        (None, Some(t)) => locate_region(&grey_source(dec), t, opts, &mut said).map_err(err)?,
         _ => {
             let given = resolve_roi(opts, dec.width, dec.height).map_err(err)?;
             if opts.refine_roi {

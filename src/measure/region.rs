@@ -16,8 +16,8 @@ use crate::target::{Direction, Sweep, SweepLaw, Target};
 
 /// The chart `opts.chart_index` picks in `plane` (see [`crate::locate::find_chart`]):
 /// its corners (image px), the search's messages added to `said`.
-pub(super) fn locate_region(
-    plane: &Plane,
+pub(super) fn locate_region<S: crate::locate::Source + ?Sized>(
+    plane: &S,
     target: &Target,
     opts: &MeasureOptions,
     said: &mut Said,
@@ -126,6 +126,19 @@ pub(super) fn full_grey(dec: &Decoded) -> Vec<Plane> {
         y1: dec.height,
     };
     planes(dec, full, &file_tone(dec).0, Channel::Luma)
+}
+
+/// The photo as the chart search reads it: linear luminance (the file's tone, the
+/// same values as [`full_grey`]), converted only where the search looks.
+pub(super) fn grey_source(
+    dec: &Decoded,
+) -> crate::locate::Converted<impl Fn(usize, usize, &mut [f32]) + Sync + '_> {
+    let tone = file_tone(dec).0;
+    crate::locate::Converted {
+        width: dec.width,
+        height: dec.height,
+        convert: crate::photo::linearise::row_converter(dec, &tone, Channel::Luma),
+    }
 }
 
 /// The `--roi` corners, checked: in order round the region and inside the `w`×`h` image.

@@ -238,19 +238,7 @@ pub fn planes_within(
         Samples::F32(_) => Vec::new(),
     };
     let nc = dec.channels;
-    // Which channels feed the planes, and with what weight.
-    let mixes: Vec<Vec<(usize, f32)>> = if nc == 1 {
-        vec![vec![(0, 1.0)]]
-    } else {
-        match channel {
-            Channel::R => vec![vec![(0, 1.0)]],
-            Channel::G => vec![vec![(1, 1.0)]],
-            Channel::B => vec![vec![(2, 1.0)]],
-            Channel::All => (0..3).map(|c| vec![(c, 1.0)]).collect(),
-            Channel::Luma => vec![(0..3).map(|c| (c, LUMA_WEIGHTS[c])).collect()],
-        }
-    };
-    mixes
+    mixes(channel, nc)
         .iter()
         .map(|mix| {
             let mut out = vec![0f32; w * h];
@@ -278,6 +266,47 @@ pub fn planes_within(
             }
         })
         .collect()
+}
+
+/// Which channels feed each plane of [`planes`], and with what weight.
+fn mixes(channel: Channel, nc: usize) -> Vec<Vec<(usize, f32)>> {
+    if nc == 1 {
+        vec![vec![(0, 1.0)]]
+    } else {
+        match channel {
+            Channel::R => vec![vec![(0, 1.0)]],
+            Channel::G => vec![vec![(1, 1.0)]],
+            Channel::B => vec![vec![(2, 1.0)]],
+            Channel::All => (0..3).map(|c| vec![(c, 1.0)]).collect(),
+            Channel::Luma => vec![(0..3).map(|c| (c, LUMA_WEIGHTS[c])).collect()],
+        }
+    }
+}
+
+/// A row converter for the first plane [`planes`] gives for `channel`:
+/// `convert(y, x0, out)` fills `out` with the linear values of image row `y`
+/// from column `x0` on (`out.len()` columns), exactly as the plane holds them.
+pub fn row_converter<'a>(
+    dec: &'a Decoded,
+    tone: &Tone,
+    channel: Channel,
+) -> impl Fn(usize, usize, &mut [f32]) + Sync + use<'a> {
+    let lut = match dec.samples {
+        Samples::U8(_) => tone.lut(256),
+        Samples::U16(_) => tone.lut(65536),
+        Samples::F32(_) => Vec::new(),
+    };
+    let nc = dec.channels;
+    let mix = mixes(channel, nc).swap_remove(0);
+    let tone = tone.clone();
+    move |y: usize, x0: usize, out: &mut [f32]| {
+        let src = (y * dec.width + x0) * nc..(y * dec.width + x0 + out.len()) * nc;
+        match &dec.samples {
+            Samples::U8(v) => convert_row(out, &v[src], nc, &mix, &lut),
+            Samples::U16(v) => convert_row(out, &v[src], nc, &mix, &lut),
+            Samples::F32(v) => convert_row_f32(out, &v[src], nc, &mix, &tone),
+        }
+    }
 }
 
 /// Converts one row of interleaved codes to a weighted sum of linear channels.
