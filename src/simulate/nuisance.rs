@@ -332,6 +332,25 @@ mod tests {
         }
     }
 
+    /// The camera JSON (the Python `simulate` camera dict) takes the nuisances by name.
+    #[test]
+    fn camera_json_takes_the_nuisances_by_name() {
+        let c: crate::simulate::Camera = serde_json::from_str(
+            r#"{"sharpen": {"amount": 0.8, "radius_px": 1.2},
+                "light_gradient": {"ratio": 3, "toward_deg": 0},
+                "light_colour": [1, 0.8, 0.6], "chroma": "4:2:0", "jpeg_quality": 75}"#,
+        )
+        .unwrap();
+        c.validate().unwrap();
+        assert_eq!(c.sharpen.unwrap().radius_px, 1.2);
+        assert_eq!(c.light_gradient.unwrap().ratio, 3.0);
+        assert_eq!(c.light_colour, Some([1.0, 0.8, 0.6]));
+        assert_eq!(c.chroma, Chroma::S420);
+        let bad: crate::simulate::Camera =
+            serde_json::from_str(r#"{"sharpen": {"amount": 9, "radius_px": 1}}"#).unwrap();
+        assert!(bad.validate().is_err());
+    }
+
     #[test]
     fn sharpening_gain_approaches_the_continuous_form_for_wide_kernels() {
         let sh = Sharpen {
