@@ -42,9 +42,22 @@ impl FolderLock {
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
+                // The holder writes its pid just after locking: a run that
+                // read the file in between waits briefly (≤ 100 ms) to name it.
+                let mut holder = earlier;
+                for _ in 0..20 {
+                    if !holder.is_empty() {
+                        break;
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(5));
+                    holder.clear();
+                    let _ = file.seek(SeekFrom::Start(0));
+                    let _ = file.read_to_string(&mut holder);
+                    holder = holder.trim().to_string();
+                }
                 return Err(BatchError::Locked {
                     dir: dir.display().to_string(),
-                    holder: holder_text(&earlier),
+                    holder: holder_text(&holder),
                 });
             }
             Err(std::fs::TryLockError::Error(e)) => {
