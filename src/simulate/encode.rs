@@ -68,47 +68,7 @@ pub fn encode(camera: &Camera, linear: &[f32], format: PhotoFormat) -> Result<Ve
     if format == PhotoFormat::Dng {
         return super::dng::encode(camera, linear);
     }
-    let (w, h) = (camera.width_px as u32, camera.height_px as u32);
-    let codes = quantise(camera, linear);
-    let bytes8 = || codes.iter().map(|&c| c as u8).collect::<Vec<u8>>();
-    let mut out = Vec::new();
-    match format {
-        PhotoFormat::Dng => return super::dng::encode(camera, linear),
-        PhotoFormat::Jpeg => {
-            if camera.stored_bits() != 8 {
-                return Err(SimError::Parameter(
-                    "JPEG stores 8 bits: use --bits 8 or a PNG/TIFF name".into(),
-                ));
-            }
-            let q = camera.jpeg_quality.unwrap_or(90);
-            JpegEncoder::new_with_quality(&mut out, q)
-                .write_image(&bytes8(), w, h, image::ExtendedColorType::L8)
-                .map_err(img_err)?;
-        }
-        PhotoFormat::Png => {
-            out = png_bytes(camera, &codes, w, h, png::ColorType::Grayscale)?;
-        }
-        PhotoFormat::Tiff => {
-            let mut cur = Cursor::new(Vec::new());
-            {
-                use tiff::encoder::{TiffEncoder, colortype};
-                let mut enc = TiffEncoder::new(&mut cur).map_err(img_err)?;
-                if camera.stored_bits() == 8 {
-                    let buf = bytes8();
-                    enc.write_image::<colortype::Gray8>(w, h, &buf)
-                        .map_err(img_err)?;
-                } else {
-                    let mut im = enc.new_image::<colortype::Gray16>(w, h).map_err(img_err)?;
-                    if let Some(order) = camera.bayer {
-                        write_cfa_tags(&mut im, order).map_err(img_err)?;
-                    }
-                    im.write_data(&codes).map_err(img_err)?;
-                }
-            }
-            out = cur.into_inner();
-        }
-    }
-    Ok(out)
+    encode_codes(camera, &quantise(camera, linear), false, format)
 }
 
 /// Encodes a colour shot's recorded linear R, G, B planes (1.0 = clipping) in
@@ -119,19 +79,33 @@ pub fn encode_rgb(
     rgb: &[Vec<f32>; 3],
     format: PhotoFormat,
 ) -> Result<Vec<u8>, SimError> {
-    let (w, h) = (camera.width_px as u32, camera.height_px as u32);
+    if format == PhotoFormat::Dng {
+        return Err(SimError::Parameter(
+            "a DNG holds a Bayer mosaic, not a colour image".into(),
+        ));
+    }
     let planes: Vec<Vec<u16>> = rgb.iter().map(|p| quantise(camera, p)).collect();
-    let n = planes[0].len();
-    let interleaved: Vec<u16> = (0..n)
+    let interleaved: Vec<u16> = (0..planes[0].len())
         .flat_map(|i| [planes[0][i], planes[1][i], planes[2][i]])
         .collect();
-    let bytes8 = || interleaved.iter().map(|&c| c as u8).collect::<Vec<u8>>();
+    encode_codes(camera, &interleaved, true, format)
+}
+
+/// Encodes code values (grey, or interleaved RGB when `rgb`) as PNG, TIFF or JPEG.
+fn encode_codes(
+    camera: &Camera,
+    codes: &[u16],
+    rgb: bool,
+    format: PhotoFormat,
+) -> Result<Vec<u8>, SimError> {
+    let (w, h) = (camera.width_px as u32, camera.height_px as u32);
     let eight = camera.stored_bits() == 8;
+    let bytes8 = || codes.iter().map(|&c| c as u8).collect::<Vec<u8>>();
     let mut out = Vec::new();
     match format {
         PhotoFormat::Dng => {
-            return Err(SimError::Parameter(
-                "a DNG holds a Bayer mosaic, not a colour image".into(),
+            return Err(SimError::Internal(
+                "a DNG is written from linear data".into(),
             ));
         }
         PhotoFormat::Jpeg => {
@@ -140,34 +114,52 @@ pub fn encode_rgb(
                     "JPEG stores 8 bits: use --bits 8 or a PNG/TIFF name".into(),
                 ));
             }
-            let (ww, hh) = (
-                u16::try_from(w).map_err(img_err)?,
-                u16::try_from(h).map_err(img_err)?,
-            );
-            let mut enc = jpeg_encoder::Encoder::new(&mut out, camera.jpeg_quality.unwrap_or(90));
-            enc.set_sampling_factor(match camera.chroma {
-                Chroma::S420 => jpeg_encoder::SamplingFactor::R_4_2_0,
-                Chroma::S422 => jpeg_encoder::SamplingFactor::R_4_2_2,
-                Chroma::S444 => jpeg_encoder::SamplingFactor::R_4_4_4,
-            });
-            enc.encode(&bytes8(), ww, hh, jpeg_encoder::ColorType::Rgb)
-                .map_err(img_err)?;
+            let q = camera.jpeg_quality.unwrap_or(90);
+            if rgb {
+                let (ww, hh) = (
+                    u16::try_from(w).map_err(img_err)?,
+                    u16::try_from(h).map_err(img_err)?,
+                );
+                let mut enc = jpeg_encoder::Encoder::new(&mut out, q);
+                enc.set_sampling_factor(match camera.chroma {
+                    Chroma::S420 => jpeg_encoder::SamplingFactor::R_4_2_0,
+                    Chroma::S422 => jpeg_encoder::SamplingFactor::R_4_2_2,
+                    Chroma::S444 => jpeg_encoder::SamplingFactor::R_4_4_4,
+                });
+                enc.encode(&bytes8(), ww, hh, jpeg_encoder::ColorType::Rgb)
+                    .map_err(img_err)?;
+            } else {
+                JpegEncoder::new_with_quality(&mut out, q)
+                    .write_image(&bytes8(), w, h, image::ExtendedColorType::L8)
+                    .map_err(img_err)?;
+            }
         }
         PhotoFormat::Png => {
-            out = png_bytes(camera, &interleaved, w, h, png::ColorType::Rgb)?;
+            let colour = if rgb {
+                png::ColorType::Rgb
+            } else {
+                png::ColorType::Grayscale
+            };
+            out = png_bytes(camera, codes, w, h, colour)?;
         }
         PhotoFormat::Tiff => {
             let mut cur = Cursor::new(Vec::new());
             {
                 use tiff::encoder::{TiffEncoder, colortype};
                 let mut enc = TiffEncoder::new(&mut cur).map_err(img_err)?;
-                if eight {
-                    enc.write_image::<colortype::RGB8>(w, h, &bytes8())
-                        .map_err(img_err)?;
-                } else {
-                    enc.write_image::<colortype::RGB16>(w, h, &interleaved)
-                        .map_err(img_err)?;
+                match (rgb, eight) {
+                    (true, true) => enc.write_image::<colortype::RGB8>(w, h, &bytes8()),
+                    (true, false) => enc.write_image::<colortype::RGB16>(w, h, codes),
+                    (false, true) => enc.write_image::<colortype::Gray8>(w, h, &bytes8()),
+                    (false, false) => {
+                        let mut im = enc.new_image::<colortype::Gray16>(w, h).map_err(img_err)?;
+                        if let Some(order) = camera.bayer {
+                            write_cfa_tags(&mut im, order).map_err(img_err)?;
+                        }
+                        im.write_data(codes)
+                    }
                 }
+                .map_err(img_err)?;
             }
             out = cur.into_inner();
         }

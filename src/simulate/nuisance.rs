@@ -47,17 +47,13 @@ impl Sharpen {
 
     /// The 1-D kernel's transfer G(f) at `f` cycles/pixel (real: the kernel is symmetric).
     pub fn blur_transfer(&self, f: f64) -> f64 {
-        let k = self.kernel();
-        let n = (k.len() / 2) as f64;
-        k.iter()
-            .enumerate()
-            .map(|(i, g)| g * (2.0 * PI * f * (i as f64 - n)).cos())
-            .sum()
+        transfer_of(&self.kernel(), f)
     }
 
     /// The sharpening's transfer at image frequency (u, v) cycles/pixel: 1 + a·(1 − G(u)·G(v)).
     pub fn gain(&self, u: f64, v: f64) -> f64 {
-        1.0 + self.amount * (1.0 - self.blur_transfer(u) * self.blur_transfer(v))
+        let k = self.kernel();
+        1.0 + self.amount * (1.0 - transfer_of(&k, u) * transfer_of(&k, v))
     }
 
     /// Checks the ranges.
@@ -120,6 +116,15 @@ impl Sharpen {
                 }
             });
     }
+}
+
+/// The DFT of a symmetric kernel g[−n..=n] at `f` cycles/sample.
+fn transfer_of(k: &[f64], f: f64) -> f64 {
+    let n = (k.len() / 2) as f64;
+    k.iter()
+        .enumerate()
+        .map(|(i, g)| g * (2.0 * PI * f * (i as f64 - n)).cos())
+        .sum()
 }
 
 impl FromStr for Sharpen {

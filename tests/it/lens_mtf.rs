@@ -120,13 +120,7 @@ fn square_pixel_divisor_gives_the_optics_within_0_01_rms() {
         let (sys_rms, _, _) = {
             let c = &m.curves[0];
             let truth = &shot.truth().unwrap().rows;
-            let at = |f: f64| {
-                let i = truth
-                    .partition_point(|r| r.freq_cy_px < f)
-                    .clamp(1, truth.len() - 1);
-                let (a, b) = (&truth[i - 1], &truth[i]);
-                a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
-            };
+            let at = |f: f64| crate::csv_support::rows_truth_at(truth, f);
             let v: Vec<f64> = c
                 .points
                 .iter()

@@ -116,12 +116,7 @@ struct Score {
 }
 
 fn truth_at(shot: &Shot, f: f64) -> f64 {
-    let rows = &shot.truth().unwrap().rows;
-    let i = rows
-        .partition_point(|r| r.freq_cy_px < f)
-        .clamp(1, rows.len() - 1);
-    let (a, b) = (&rows[i - 1], &rows[i]);
-    a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
+    crate::csv_support::rows_truth_at(&shot.truth().unwrap().rows, f)
 }
 
 fn truth_mtf50(shot: &Shot) -> f64 {

@@ -278,28 +278,22 @@ fn readme_sample_prints_its_summary_line_and_no_warning() {
 fn merge_of_bad_inputs_leaves_no_output_folder() {
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("merged");
-    let m = Command::cargo_bin("sweepmtf")
-        .unwrap()
-        .arg("merge")
-        .arg(d.path().join("no-such-run"))
-        .arg("-o")
-        .arg(&out)
-        .assert()
-        .failure();
-    let err = stderr(&m);
+    let merge = || {
+        sweepmtf()
+            .arg("merge")
+            .arg(d.path().join("no-such-run"))
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .failure()
+    };
+    let err = stderr(&merge());
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(!out.exists(), "merge left {}", out.display());
     // An existing output folder is kept as it was.
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "mine").unwrap();
-    Command::cargo_bin("sweepmtf")
-        .unwrap()
-        .arg("merge")
-        .arg(d.path().join("no-such-run"))
-        .arg("-o")
-        .arg(&out)
-        .assert()
-        .failure();
+    merge();
     assert_eq!(
         std::fs::read_to_string(out.join("keep.txt")).unwrap(),
         "mine"
