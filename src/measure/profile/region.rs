@@ -1,0 +1,234 @@
+//! The region of a strip under a plain homography, visited sample by sample
+//! in cache-sized tiles (the fast path of binning).
+
+use crate::geometry::Point;
+use crate::photo::Plane;
+
+/// The sampled region of a strip, for visiting its samples.
+#[derive(Clone, Copy)]
+pub(super) struct Region<'a> {
+    pub(super) planes: &'a [&'a Plane],
+    /// Image → strip homography, scaled so its denominator is positive in the region.
+    pub(super) m: [f64; 9],
+    pub(super) ymin: f64,
+    pub(super) ymax: f64,
+    pub(super) t0: f64,
+    pub(super) t1: f64,
+    pub(super) s_lo: f64,
+    pub(super) s_hi: f64,
+    pub(super) bin: f64,
+    pub(super) nbins: usize,
+}
+
+impl Region<'_> {
+    /// Whether the sample centre (x, y) lies inside the region; its s if so.
+    #[inline]
+    fn inside(&self, x: f64, y: f64) -> Option<f64> {
+        let m = &self.m;
+        let rw = 1.0 / (m[6] * x + m[7] * y + m[8]);
+        let s = (m[0] * x + m[1] * y + m[2]) * rw;
+        let t = (m[3] * x + m[4] * y + m[5]) * rw;
+        (t >= self.t0 && t <= self.t1 && s >= self.s_lo && s <= self.s_hi).then_some(s)
+    }
+
+    /// Sample indices [i0, i1) of a row at height y (sample x = ox + i·sx)
+    /// inside the region. Along a row each bound is a linear inequality in x.
+    fn row_range(&self, y: f64, ox: f64, sx: f64, width: usize) -> (usize, usize) {
+        let m = &self.m;
+        let (ns, nt, w) = (m[1] * y + m[2], m[4] * y + m[5], m[7] * y + m[8]);
+        // a·x + b ≥ 0 for each bound.
+        let bounds = [
+            (m[3] - self.t0 * m[6], nt - self.t0 * w),
+            (self.t1 * m[6] - m[3], self.t1 * w - nt),
+            (m[0] - self.s_lo * m[6], ns - self.s_lo * w),
+            (self.s_hi * m[6] - m[0], self.s_hi * w - ns),
+            // The denominator itself stays positive.
+            (m[6], w),
+        ];
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for (a, b) in bounds {
+            if a > 0.0 {
+                lo = lo.max(-b / a);
+            } else if a < 0.0 {
+                hi = hi.min(-b / a);
+            } else if b < 0.0 {
+                return (0, 0);
+            }
+        }
+        if !(lo <= hi) {
+            return (0, 0);
+        }
+        let idx = |x: f64| ((x - ox) / sx).clamp(-1.0, width as f64 + 1.0);
+        let mut i0 = idx(lo).ceil() as i64;
+        let mut i1 = idx(hi).floor() as i64 + 1;
+        i0 = i0.clamp(0, width as i64);
+        i1 = i1.clamp(i0, width as i64);
+        // Make the ends agree exactly with the per-sample test.
+        let at = |i: i64| self.inside(ox + i as f64 * sx, y).is_some();
+        while i0 < i1 && !at(i0) {
+            i0 += 1;
+        }
+        while i1 > i0 && !at(i1 - 1) {
+            i1 -= 1;
+        }
+        while i0 > 0 && at(i0 - 1) {
+            i0 -= 1;
+        }
+        while i1 < width as i64 && i1 > i0 && at(i1) {
+            i1 += 1;
+        }
+        (i0 as usize, i1 as usize)
+    }
+
+    /// Calls f(bin, s, value) for every sample inside the region that falls
+    /// in one of `bins` (sorted, few): on each row only the samples around
+    /// those bins' ends are looked at.
+    pub(super) fn visit_bins<F: FnMut(usize, f64, f32)>(&self, bins: &[usize], mut f: F) {
+        let m = &self.m;
+        let inv_bin = 1.0 / self.bin;
+        let last = self.nbins - 1;
+        for band in self.bands() {
+            let plane = self.planes[band.plane];
+            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            for (dj, &(i0, i1)) in band.rows.iter().enumerate() {
+                if i0 >= i1 {
+                    continue;
+                }
+                let j = band.first + dj;
+                let y = oy + j as f64 * sy;
+                let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
+                let s_of = |i: usize| {
+                    let x = ox + i as f64 * sx;
+                    (m[0] * x + ns0) / (m[6] * x + w0)
+                };
+                let bin_of = |s: f64| ((s * inv_bin) as usize).min(last);
+                let (sa, sb) = (s_of(i0), s_of(i1 - 1));
+                let (ba, bb) = (bin_of(sa.min(sb)), bin_of(sa.max(sb)));
+                let from = bins.partition_point(|&b| b < ba);
+                for &b in bins[from..].iter().take_while(|&&b| b <= bb) {
+                    // x where s crosses the bin's ends (s is a Möbius function of x).
+                    let x_at = |s: f64| (s * w0 - ns0) / (m[0] - s * m[6]);
+                    let (xa, xb) = (x_at(b as f64 * self.bin), x_at((b + 1) as f64 * self.bin));
+                    let (xa, xb) = (xa.min(xb), xa.max(xb));
+                    let ia = (((xa - ox) / sx).floor() - 1.0).max(i0 as f64) as usize;
+                    let ib = (((xb - ox) / sx).ceil() + 2.0).min(i1 as f64) as usize;
+                    let row = &plane.data[j * plane.width..(j + 1) * plane.width];
+                    for i in ia.max(i0)..ib.min(i1) {
+                        let s = s_of(i);
+                        if bin_of(s) == b {
+                            f(b, s, row[i]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The region's sample rows in bands of TILE rows, with each row's sample range.
+    pub(super) fn bands(&self) -> Vec<Band> {
+        let mut out = Vec::new();
+        for (p, plane) in self.planes.iter().enumerate() {
+            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            // Sample rows whose centres lie within the region's vertical extent.
+            let j0 = ((self.ymin - oy) / sy).ceil().max(0.0) as usize;
+            let j1 =
+                (((self.ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
+            let ranges: Vec<(usize, usize)> = (j0..j1)
+                .map(|j| self.row_range(oy + j as f64 * sy, ox, sx, plane.width))
+                .collect();
+            for (k, rows) in ranges.chunks(TILE).enumerate() {
+                if rows.iter().any(|r| r.0 < r.1) {
+                    out.push(Band {
+                        plane: p,
+                        first: j0 + k * TILE,
+                        rows: rows.to_vec(),
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// Calls f(bin, s, value) for every sample inside the region.
+    pub(super) fn visit<F: FnMut(usize, f64, f32)>(&self, mut f: F) {
+        for band in self.bands() {
+            self.visit_band(&band, &mut f);
+        }
+    }
+
+    /// Calls f(bin, s, value) for every sample of one band, in blocks of
+    /// TILE × TILE samples so that the bins a block touches stay in cache.
+    #[inline]
+    pub(super) fn visit_band<F: FnMut(usize, f64, f32)>(&self, band: &Band, mut f: F) {
+        let m = &self.m;
+        let inv_bin = 1.0 / self.bin;
+        let last = self.nbins - 1;
+        let plane = self.planes[band.plane];
+        let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
+        let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+        let rows = &band.rows;
+        let lo = rows.iter().filter(|r| r.0 < r.1).map(|r| r.0).min();
+        let hi = rows.iter().map(|r| r.1).max().unwrap_or(0);
+        let Some(lo) = lo else { return };
+        for c0 in (lo..hi).step_by(TILE) {
+            let c1 = (c0 + TILE).min(hi);
+            for (dj, &(i0, i1)) in rows.iter().enumerate() {
+                let (i0, i1) = (i0.max(c0), i1.min(c1));
+                if i0 >= i1 {
+                    continue;
+                }
+                let j = band.first + dj;
+                let y = oy + j as f64 * sy;
+                let row = &plane.data[j * plane.width + i0..j * plane.width + i1];
+                // Along a row the homography's numerator and denominator are
+                // linear in x. The positions are computed first, a run of at
+                // most TILE at a time (a loop the compiler vectorises), then
+                // the samples are handed out.
+                let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
+                let mut s_buf = [0.0f64; TILE];
+                let s_run = &mut s_buf[..row.len()];
+                for (k, s) in s_run.iter_mut().enumerate() {
+                    let x = ox + (i0 + k) as f64 * sx;
+                    *s = (m[0] * x + ns0) / (m[6] * x + w0);
+                }
+                for (&s, &v) in s_run.iter().zip(row) {
+                    f(((s * inv_bin) as usize).min(last), s, v);
+                }
+            }
+        }
+    }
+}
+
+/// Rows and columns of a tile in [`Region::visit_band`].
+const TILE: usize = 64;
+
+/// Up to TILE consecutive sample rows of one plane, with each row's [i0, i1) range.
+pub(super) struct Band {
+    plane: usize,
+    first: usize,
+    rows: Vec<(usize, usize)>,
+}
+
+/// The x-interval where the horizontal line at `y` crosses a convex quadrilateral.
+pub fn row_span(q: &[Point; 4], y: f64) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for k in 0..4 {
+        let (a, b) = (q[k], q[(k + 1) % 4]);
+        let (ya, yb) = (a[1].min(b[1]), a[1].max(b[1]));
+        if y < ya || y > yb {
+            continue;
+        }
+        if (b[1] - a[1]).abs() < 1e-12 {
+            lo = lo.min(a[0].min(b[0]));
+            hi = hi.max(a[0].max(b[0]));
+        } else {
+            let x = a[0] + (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]);
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
