@@ -20,6 +20,9 @@ pub struct Args {
     /// Print the URL only; do not open a browser.
     #[arg(long)]
     pub no_open: bool,
+    /// A `sweepmtf batch` output folder to browse in the batch view (its table and plots).
+    #[arg(long, value_name = "DIR")]
+    pub batch: Option<PathBuf>,
     /// Output folder the page saves into (the only place it writes).
     #[arg(short = 'o', long = "out", default_value = ".", value_name = "DIR")]
     pub out: PathBuf,
@@ -51,6 +54,7 @@ pub fn run(a: &Args) -> Result<(), CliError> {
         target: a.target.clone(),
         port: a.port,
         out_dir: a.out.clone(),
+        batch: a.batch.clone(),
     };
     let gui = Gui::start(config, 4).map_err(|e| match e {
         GuiError::Input(m) => CliError::new(Code::Input, m),

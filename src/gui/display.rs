@@ -20,6 +20,8 @@ pub struct Rendition {
     pub height: usize,
     /// Image pixels per display pixel.
     pub scale: f64,
+    /// Linear value drawn as white when the data is linear (tone-mapped); 1 for code values.
+    pub white: f32,
 }
 
 /// Box-averages `n_ch` interleaved channels by `k` (values as given).
@@ -56,19 +58,25 @@ fn factor(w: usize, h: usize) -> usize {
     w.max(h).div_ceil(MAX_SIDE).max(1)
 }
 
-/// Linear values to sRGB bytes, the 99.5th percentile mapped to white.
-fn tone_map(lin: &[f32]) -> Vec<u8> {
+/// The linear value drawn as white: the 99.5th percentile of `lin` (1 when it is not positive).
+fn white_of(lin: &[f32]) -> f32 {
     let mut sorted: Vec<f32> = lin.iter().copied().filter(|v| v.is_finite()).collect();
-    let white = if sorted.is_empty() {
-        1.0
-    } else {
-        let i = ((sorted.len() - 1) as f64 * 0.995) as usize;
-        let (_, v, _) = sorted.select_nth_unstable_by(i, f32::total_cmp);
-        if *v > 0.0 { *v } else { 1.0 }
-    };
-    lin.iter()
-        .map(|&v| (linear_to_srgb((v / white).clamp(0.0, 1.0) as f64) * 255.0).round() as u8)
-        .collect()
+    if sorted.is_empty() {
+        return 1.0;
+    }
+    let i = ((sorted.len() - 1) as f64 * 0.995) as usize;
+    let (_, v, _) = sorted.select_nth_unstable_by(i, f32::total_cmp);
+    if *v > 0.0 { *v } else { 1.0 }
+}
+
+/// A linear value to an sRGB byte, `white` drawn as 255.
+pub fn tone_byte(v: f32, white: f32) -> u8 {
+    (linear_to_srgb((v / white).clamp(0.0, 1.0) as f64) * 255.0).round() as u8
+}
+
+/// Linear values to sRGB bytes with `white` drawn as 255.
+fn tone_map(lin: &[f32], white: f32) -> Vec<u8> {
+    lin.iter().map(|&v| tone_byte(v, white)).collect()
 }
 
 fn jpeg(rgb: &[u8], w: usize, h: usize) -> Vec<u8> {
@@ -90,14 +98,17 @@ fn jpeg(rgb: &[u8], w: usize, h: usize) -> Vec<u8> {
 pub fn of_decoded(d: &Decoded) -> Rendition {
     let k = factor(d.width, d.height);
     let (w, h) = (d.width.div_ceil(k), d.height.div_ceil(k));
+    let mut white = 1.0;
     let rgb = match &d.samples {
         Samples::U8(v) => boxed(d.width, d.height, d.channels, k, |i| v[i] as f32)
             .iter()
             .map(|&x| x.round().clamp(0.0, 255.0) as u8)
             .collect(),
-        Samples::U16(v) => tone_map(&boxed(d.width, d.height, d.channels, k, |i| {
-            v[i] as f32 / 65535.0
-        })),
+        Samples::U16(v) => {
+            let lin = boxed(d.width, d.height, d.channels, k, |i| v[i] as f32 / 65535.0);
+            white = white_of(&lin);
+            tone_map(&lin, white)
+        }
         // Float code values (0 = black, 1 = white), as for display.
         Samples::F32(v) => boxed(d.width, d.height, d.channels, k, |i| v[i] * 255.0)
             .iter()
@@ -109,6 +120,7 @@ pub fn of_decoded(d: &Decoded) -> Rendition {
         width: w,
         height: h,
         scale: k as f64,
+        white,
     }
 }
 
@@ -117,11 +129,14 @@ pub fn of_decoded(d: &Decoded) -> Rendition {
 pub fn of_plane(p: &Plane) -> Rendition {
     let k = factor(p.width, p.height);
     let (w, h) = (p.width.div_ceil(k), p.height.div_ceil(k));
-    let rgb = tone_map(&boxed(p.width, p.height, 1, k, |i| p.data[i]));
+    let lin = boxed(p.width, p.height, 1, k, |i| p.data[i]);
+    let white = white_of(&lin);
+    let rgb = tone_map(&lin, white);
     Rendition {
         jpeg: jpeg(&rgb, w, h),
         width: w,
         height: h,
         scale: (k * p.step.0) as f64,
+        white,
     }
 }

@@ -17,7 +17,9 @@ use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use sweepmtf::measure::{MeasureError, MeasureOptions, Measurement, measure_bytes, measure_raw};
+use sweepmtf::measure::{
+    MeasureError, MeasureOptions, Measurement, measure_bytes, measure_raw, measure_raw_frame,
+};
 use sweepmtf::report::json::{Timings, summary};
 use sweepmtf::report::mtf_plot::PlotFormat;
 
@@ -27,7 +29,7 @@ fn info(id: usize, p: &Photo) -> Value {
         "name": p.name,
         "width": p.width,
         "height": p.height,
-        "raw": matches!(p.source, Source::Raw(_)),
+        "raw": matches!(p.source, Source::Raw(_) | Source::Frame(_)),
         "display_width": p.display.width,
         "display_height": p.display.height,
         "display_scale": p.display.scale,
@@ -54,11 +56,14 @@ pub fn state(s: &Server) -> Reply {
         "targets": targets,
         "default_target": ses.default_target,
         "out_dir": ses.out_dir.display().to_string(),
+        "batch_dir": ses.batch.as_ref().map(|b| b.display().to_string()),
         "max_upload_bytes": MAX_UPLOAD_BYTES,
+        "photo_extensions": ["jpg", "jpeg", "png", "tif", "tiff"],
+        "raw_extensions": sweepmtf::photo::raw::RAW_EXTENSIONS,
     }))
 }
 
-fn photo(s: &Server, id: usize) -> Result<Arc<Photo>, Reply> {
+pub(super) fn photo(s: &Server, id: usize) -> Result<Arc<Photo>, Reply> {
     let ses = s.session.lock().unwrap_or_else(|e| e.into_inner());
     ses.photos
         .get(id)
@@ -82,24 +87,20 @@ pub fn display(s: &Server, id: Option<&str>) -> Reply {
     }
 }
 
-/// `POST /api/upload?name=FILE`: decodes an uploaded JPEG/PNG/TIFF and keeps it.
+/// `POST /api/upload?name=FILE`: decodes an uploaded JPEG/PNG/TIFF or camera raw and keeps it.
 pub fn upload(s: &Server, name: &str, bytes: Vec<u8>) -> Reply {
     // Only the file name is kept: it names the outputs, never a place to read.
     let name = std::path::Path::new(name)
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "upload".into());
-    if sweepmtf::photo::raw::is_raw_path(std::path::Path::new(&name)) {
-        return Reply::error(
-            415,
-            Code::Input as u8,
-            format!(
-                "{name}: raw files are read from disk: name it on the command line (sweepmtf gui {name})"
-            ),
-        );
-    }
     let t = Instant::now();
-    let p = match session::from_bytes(bytes, name) {
+    let opened = if sweepmtf::photo::raw::is_raw_path(std::path::Path::new(&name)) {
+        session::raw_from_bytes(&bytes, name)
+    } else {
+        session::from_bytes(bytes, name)
+    };
+    let p = match opened {
         Ok(p) => p,
         Err(e) => return Reply::error(422, Code::Input as u8, e),
     };
@@ -234,6 +235,7 @@ fn run(j: &Job) -> Result<Measurement, MeasureError> {
     match &j.photo.source {
         Source::Raw(path) => measure_raw(path, &j.photo.name, target, &j.opts),
         Source::File(bytes) => measure_bytes(bytes, &j.photo.name, target, &j.opts),
+        Source::Frame(f) => measure_raw_frame(f, &j.photo.name, target, &j.opts),
     }
 }
 

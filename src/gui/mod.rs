@@ -8,7 +8,10 @@
 //! into the binary (no network, no CDN). See `server` for the security rules.
 
 mod assets;
+mod batch_api;
+mod charts_api;
 mod display;
+mod magnify;
 mod measure_api;
 mod model_api;
 mod server;
@@ -29,6 +32,8 @@ pub struct GuiConfig {
     pub port: u16,
     /// The output folder the page writes into (the only place it writes).
     pub out_dir: PathBuf,
+    /// A `batch` output folder to show in the batch view.
+    pub batch: Option<PathBuf>,
 }
 
 /// Why the server could not start.

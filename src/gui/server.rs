@@ -7,7 +7,7 @@
 //! refused (DNS rebinding, cross-site requests); bodies are bounded.
 
 use super::session::Session;
-use super::{GuiConfig, GuiError, assets, measure_api, model_api};
+use super::{GuiConfig, GuiError, assets, batch_api, charts_api, magnify, measure_api, model_api};
 use serde_json::{Value, json};
 use std::io::{Cursor, Read};
 use std::sync::Mutex;
@@ -124,6 +124,10 @@ impl Server {
             ("/", true, _) => assets::page(&self.token),
             ("/api/state", true, _) => measure_api::state(self),
             ("/api/display", true, _) => measure_api::display(self, q("id")),
+            ("/api/crop", true, _) => magnify::endpoint(self, q("id"), q("x"), q("y")),
+            ("/api/charts", true, _) => charts_api::endpoint(self, q("id"), q("target")),
+            ("/api/batch", true, _) => batch_api::table(q("dir")),
+            ("/api/batch/file", true, _) => batch_api::file(q("dir"), q("name")),
             ("/api/upload", _, true) => match read_body(req, MAX_UPLOAD_BYTES) {
                 Ok(b) => measure_api::upload(self, q("name").unwrap_or("upload"), b),
                 Err(r) => r,

@@ -2,11 +2,13 @@
 //! once, kept in memory), the targets it may choose, and the output folder.
 
 use super::display::{self, Rendition};
+use super::magnify::Full;
 use super::{GuiConfig, GuiError};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use sweepmtf::photo::decode::decode_bytes;
 use sweepmtf::photo::exif::{ExifFacts, facts_from_bytes};
+use sweepmtf::photo::raw::RawFrame;
 use sweepmtf::target::Target;
 
 /// Where a photo's full-resolution data is.
@@ -16,6 +18,10 @@ pub enum Source {
     File(Vec<u8>),
     /// A camera raw file named on the command line (measured from the file).
     Raw(PathBuf),
+    /// A camera raw file uploaded from the page, decoded whole and kept in
+    /// memory (its bytes were written to a private temporary file for the
+    /// decoder, removed once read).
+    Frame(Arc<RawFrame>),
 }
 
 /// One photo the page may measure.
@@ -34,6 +40,8 @@ pub struct Photo {
     pub facts: ExifFacts,
     /// What the page shows.
     pub display: Rendition,
+    /// The full-resolution data, decoded on the magnifier's first request.
+    pub full: OnceLock<Result<Arc<Full>, String>>,
 }
 
 /// A target the page may choose.
@@ -80,6 +88,8 @@ pub struct Session {
     pub default_target: Option<usize>,
     /// The output folder (the only place the page writes).
     pub out_dir: PathBuf,
+    /// The batch output folder named on the command line, if any.
+    pub batch: Option<PathBuf>,
 }
 
 fn stem_of(name: &str) -> String {
@@ -122,6 +132,7 @@ impl Session {
             targets,
             default_target,
             out_dir: config.out_dir.clone(),
+            batch: config.batch.clone(),
         };
         for p in &config.photos {
             let photo = open_path(p).map_err(GuiError::Input)?;
@@ -136,19 +147,47 @@ fn open_path(path: &Path) -> Result<Photo, String> {
     let name = path.display().to_string();
     if sweepmtf::photo::raw::is_raw_path(path) {
         let frame = sweepmtf::photo::raw::decode_raw(path).map_err(|e| e.to_string())?;
-        let plane = frame.location_plane();
-        return Ok(Photo {
-            stem: stem_of(&name),
-            name,
-            source: Source::Raw(path.to_path_buf()),
-            width: frame.width,
-            height: frame.height,
-            facts: frame.facts.clone(),
-            display: display::of_plane(&plane),
-        });
+        return Ok(raw_photo(&frame, name, Source::Raw(path.to_path_buf())));
     }
     let bytes = std::fs::read(path).map_err(|e| format!("{name}: {e}"))?;
     from_bytes(bytes, name)
+}
+
+/// A raw photo: its display rendition from the frame's location plane.
+fn raw_photo(frame: &RawFrame, name: String, source: Source) -> Photo {
+    Photo {
+        stem: stem_of(&name),
+        name,
+        width: frame.width,
+        height: frame.height,
+        facts: frame.facts.clone(),
+        display: display::of_plane(&frame.location_plane()),
+        source,
+        full: OnceLock::new(),
+    }
+}
+
+/// Keeps an uploaded camera raw file: its bytes go to a private temporary
+/// file with the same extension (the decoders read files), which is removed
+/// as soon as the frame is decoded; messages name `name`, not that file.
+pub fn raw_from_bytes(bytes: &[u8], name: String) -> Result<Photo, String> {
+    let ext = Path::new(&name)
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    let mut tmp = tempfile::Builder::new()
+        .prefix("sweepmtf-gui-")
+        .suffix(&ext)
+        .tempfile()
+        .map_err(|e| format!("{name}: cannot keep the upload: {e}"))?;
+    std::io::Write::write_all(&mut tmp, bytes)
+        .map_err(|e| format!("{name}: cannot keep the upload: {e}"))?;
+    let at = tmp.path().display().to_string();
+    let frame = sweepmtf::photo::raw::decode_raw(tmp.path())
+        .map_err(|e| e.to_string().replace(&at, &name))?;
+    drop(tmp);
+    let frame = Arc::new(frame);
+    Ok(raw_photo(&frame, name, Source::Frame(frame.clone())))
 }
 
 /// Keeps an uploaded or read JPEG/PNG/TIFF, decoded once for its display
@@ -164,5 +203,6 @@ pub fn from_bytes(bytes: Vec<u8>, name: String) -> Result<Photo, String> {
         source: Source::File(bytes),
         facts,
         name,
+        full: OnceLock::new(),
     })
 }

@@ -45,7 +45,7 @@ pub use estimate::Method;
 pub use law::{LawKind, PhaseLaw};
 pub use lens_fit::{DistortionFound, DistortionSource};
 pub use patches::PatchResult;
-pub use region::{rect_strip, target_homography};
+pub use region::{charts_in, rect_strip, target_homography};
 
 use frame::{
     decode_bytes_with_pitch, decode_with_pitch, measure_decoded_at, measure_frame_at, read_photo,
@@ -469,6 +469,23 @@ pub fn measure_raw(
         (c.x0, c.y0, c.x1, c.y1)
     });
     let frame = decode_raw_within(path, want).map_err(|e| err(Failure::Raw(e.to_string())))?;
+    measure_raw_frame(&frame, name, target, opts)
+}
+
+/// Measures a camera raw frame already decoded (whole, or at least the part
+/// [`measure_raw`] would read), exactly as [`measure_raw`] measures its file;
+/// `name` is used in messages and the outputs.
+pub fn measure_raw_frame(
+    frame: &crate::photo::raw::RawFrame,
+    name: &str,
+    target: Option<&Target>,
+    opts: &MeasureOptions,
+) -> Result<Measurement, MeasureError> {
+    let err = |failure: Failure| MeasureError {
+        path: name.to_string(),
+        failure,
+    };
+    check_options(opts).map_err(err)?;
     let mut said = Said::default();
     let roi = match (opts.roi, target) {
         // No region but a target: find the chart from its fiducials.
@@ -487,7 +504,7 @@ pub fn measure_raw(
             }
         }
     };
-    measure_frame_at(&frame, name, target, opts, &roi, said)
+    measure_frame_at(frame, name, target, opts, &roi, said)
 }
 
 /// Reads the target description named in the options, if any.

@@ -141,6 +141,15 @@ pub(super) fn grey_source(
     }
 }
 
+/// Every copy of `target` in a decoded photo (left to right), found from its
+/// luma as `measure` finds them (for a page that lets the user pick one).
+pub fn charts_in(
+    dec: &Decoded,
+    target: &Target,
+) -> Result<Vec<crate::locate::Located>, crate::locate::LocateError> {
+    crate::locate::find_charts(&grey_source(dec), target)
+}
+
 /// The `--roi` corners, checked: in order round the region and inside the `w`×`h` image.
 pub(super) fn resolve_roi(
     opts: &MeasureOptions,

@@ -102,7 +102,7 @@ impl Driver {
         self.cmd(method, &format!("/session/{}{path}", self.session), &body)
     }
 
-    fn js(&self, script: &str) -> Value {
+    pub fn js(&self, script: &str) -> Value {
         self.s(
             "POST",
             "/execute/sync",
@@ -126,7 +126,7 @@ impl Driver {
         }
     }
 
-    fn element(&self, css: &str) -> String {
+    pub fn element(&self, css: &str) -> String {
         let v = self.s(
             "POST",
             "/element",
@@ -141,7 +141,7 @@ impl Driver {
 
     /// A screenshot of the window, cut below the shown view's panes, as
     /// target/gui-screenshots/NAME.
-    fn screenshot(&self, name: &str) -> PathBuf {
+    pub fn screenshot(&self, name: &str) -> PathBuf {
         let v = self.s("GET", "/screenshot", json!({}));
         let bytes = base64_decode(v.as_str().unwrap());
         let bottom = self
@@ -190,7 +190,7 @@ impl Drop for Driver {
 }
 
 /// Standard base64 (the WebDriver screenshot encoding).
-fn base64_decode(s: &str) -> Vec<u8> {
+pub(crate) fn base64_decode(s: &str) -> Vec<u8> {
     let val = |c: u8| match c {
         b'A'..=b'Z' => Some(c - b'A'),
         b'a'..=b'z' => Some(c - b'a' + 26),
@@ -285,6 +285,36 @@ fn browser_measures_drags_saves_and_models() {
     let errors = d.js("return [...document.querySelectorAll('#warnings li.error')].map(e => e.textContent).join('; ');");
     assert_eq!(errors, json!(""), "measurement error after the drag");
     d.screenshot("measure.png");
+
+    // Hold corner 1 while dragging: the magnifier shows the photo's own
+    // pixels (a full-resolution window from /api/crop) around it.
+    let corner = d.element("#corner-0");
+    let count = d
+        .js("return Number(document.body.dataset.measureCount);")
+        .as_f64()
+        .unwrap();
+    d.s("POST", "/actions", json!({"actions": [{
+        "type": "pointer", "id": "mouse", "parameters": {"pointerType": "mouse"},
+        "actions": [
+            {"type": "pointerMove", "origin": {"element-6066-11e4-a52e-4f735466cecf": corner}, "x": 0, "y": 0, "duration": 0},
+            {"type": "pointerDown", "button": 0},
+            {"type": "pointerMove", "origin": "pointer", "x": 2, "y": 1, "duration": 100},
+        ],
+    }]}));
+    d.wait("const m = document.getElementById('mag-full'); return Number(document.body.dataset.cropCount) >= 1 && m && (m.getAttribute('href') || '').startsWith('data:image/png') && !document.getElementById('magnifier').classList.contains('hidden');", 30);
+    // Six screen pixels per image pixel: the window spans 30 image pixels.
+    let span = d.js("return document.getElementById('magnifier').getAttribute('viewBox').split(' ').map(Number)[2];");
+    assert_eq!(span.as_f64(), Some(30.0));
+    d.screenshot("measure_magnifier.png");
+    d.s(
+        "POST",
+        "/actions",
+        json!({"actions": [{
+            "type": "pointer", "id": "mouse", "parameters": {"pointerType": "mouse"},
+            "actions": [{"type": "pointerUp", "button": 0}],
+        }]}),
+    );
+    d.wait(&format!("return Number(document.body.dataset.measureCount) > {count} && document.body.dataset.state === 'ready';"), 60);
 
     // Save, then the same measurement from the command line.
     let el = d.element("#save");

@@ -29,7 +29,7 @@ fn pose(rot: f64, tilt: f64, axis: f64, seed: u64) -> Pose {
 }
 
 /// The two shots and the photo holding them side by side (left, right).
-fn two_charts(dir: &Path) -> (PathBuf, [sweepmtf::simulate::Shot; 2]) {
+pub(crate) fn two_charts(dir: &Path) -> (PathBuf, [sweepmtf::simulate::Shot; 2]) {
     let target = sweep::a4_log();
     let (left, lj) = sweep::shoot(&target, &pose(6.0, 20.0, 90.0, 21)).unwrap();
     let (right, rj) = sweep::shoot(&target, &pose(-12.0, 30.0, 20.0, 22)).unwrap();

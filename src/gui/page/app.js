@@ -66,7 +66,7 @@ function polyline(pts) { return pts.map((p, i) => (i ? "L" : "M") + p[0].toFixed
 // ---------------------------------------------------------------- measure view
 const M = {
   state: null, photo: null, corners: null, result: null, busy: false, pending: null,
-  count: 0, drag: null, modelCut: null,
+  count: 0, drag: null, modelCut: null, charts: [],
 };
 
 function fillSelect(sel, items, value) {
@@ -85,7 +85,29 @@ async function loadState() {
   if (!$("target").options.length) {
     fillSelect($("target"), targets, M.state.default_target === null ? "" : M.state.default_target);
     $("out-dir").value = M.state.out_dir;
+    $("file").setAttribute("accept", M.state.photo_extensions.concat(M.state.raw_extensions).map((e) => "." + e).join(","));
   }
+}
+
+// Every copy of the target in the photo (/api/charts): with several, a picker
+// (measure --chart-index) and their outlines on the photo.
+async function findCharts() {
+  M.charts = [];
+  $("chart-pick").classList.add("hidden");
+  if (!M.photo || $("target").value === "") return;
+  const id = M.photo.id, t = $("target").value;
+  try {
+    const r = await api(`/api/charts?id=${id}&target=${t}`);
+    if (!M.photo || M.photo.id !== id || $("target").value !== t) return;
+    M.charts = r.charts;
+  } catch (e) { return; }
+  if (M.charts.length > 1) {
+    const n = M.charts.length;
+    fillSelect($("chart"), M.charts.map((c) => [c.index, `${c.index + 1} of ${n}` + (c.index === 0 ? " (leftmost)" : "")]), M.chartIndex || 0);
+    $("chart-pick").classList.remove("hidden");
+  }
+  document.body.dataset.charts = String(M.charts.length);
+  drawOverlay();
 }
 
 function showPhoto(id) {
@@ -100,7 +122,8 @@ function showPhoto(id) {
   el("g", { id: "overlay" }, svg);
   $("stage").classList.add("has-photo");
   drawMagnifierImage();
-  if ($("target").value !== "") { measure(null); } else { defaultCorners(); drawOverlay(); }
+  M.chartIndex = 0;
+  if ($("target").value !== "") { measure(null); findCharts(); } else { M.charts = []; $("chart-pick").classList.add("hidden"); defaultCorners(); drawOverlay(); }
 }
 
 function defaultCorners() {
@@ -128,6 +151,7 @@ async function measure(corners) {
   if (!M.photo) return;
   const req = options();
   req.roi = corners;
+  if (!corners && M.charts.length > 1) req.chart_index = M.chartIndex || 0;
   if (M.busy) { M.pending = req; return; }
   M.busy = true;
   document.body.dataset.state = "busy";
@@ -178,6 +202,11 @@ function drawOverlay() {
       if (c.alias_line_px) { const l = c.alias_line_px; el("line", { x1: l[0][0], y1: l[0][1], x2: l[1][0], y2: l[1][1], class: "alias-line", "stroke-width": 2 * lw }, g); }
     }
   }
+  for (const c of M.charts.length > 1 ? M.charts : []) {
+    el("polygon", { points: c.corners_px.map((p) => p.join(",")).join(" "), class: "other-chart", "stroke-width": lw }, g);
+    const top = c.corners_px.reduce((a, p) => (p[1] < a[1] ? p : a));
+    el("text", { x: top[0], y: top[1] - 8 * s, class: "corner-label", "font-size": 16 * s }, g, `chart ${c.index + 1}`);
+  }
   if (!M.corners) return;
   el("polygon", { points: M.corners.map((p) => p.join(",")).join(" "), class: "roi", "stroke-width": lw }, g);
   M.corners.forEach((p, i) => {
@@ -226,19 +255,46 @@ function endDrag(evt) {
   measure(M.corners.map((c) => [c[0], c[1]]));
 }
 
-// The magnifier: the display rendition around the corner, 6× (the corner's
-// position is kept to 0.25 px; the measurement reads the full-resolution photo).
+// The magnifier: the photo's own pixels around the corner, 6 screen pixels
+// per image pixel. The display rendition is drawn first (at once); the
+// full-resolution window (/api/crop, 64 px around the corner) over it as soon
+// as it arrives, and again when the corner leaves its middle. The corner's
+// position is kept to 0.25 px.
 function drawMagnifierImage() {
   const m = $("magnifier"), p = M.photo;
   m.innerHTML = "";
+  M.crop = { at: null, busy: false, want: null };
   el("image", { href: `/api/display?id=${p.id}&token=${TOKEN}`, x: 0, y: 0, width: p.width, height: p.height, preserveAspectRatio: "none" }, m);
+  el("image", { id: "mag-full", preserveAspectRatio: "none", width: 0, height: 0 }, m);
   el("line", { id: "mag-h", stroke: "#fc3" }, m);
   el("line", { id: "mag-v", stroke: "#fc3" }, m);
 }
 
+async function fetchCrop(c) {
+  const k = M.crop;
+  if (!k) return;
+  if (k.busy) { k.want = c; return; }
+  if (k.at && Math.abs(c[0] - k.at[0]) < 12 && Math.abs(c[1] - k.at[1]) < 12) return;
+  k.busy = true; k.want = null;
+  try {
+    const r = await fetch(`/api/crop?id=${M.photo.id}&x=${c[0]}&y=${c[1]}&token=${TOKEN}`);
+    if (r.ok) {
+      const v = await r.json();
+      const im = $("mag-full");
+      if (im) { im.setAttribute("href", v.png); im.setAttribute("x", v.x); im.setAttribute("y", v.y); im.setAttribute("width", v.width); im.setAttribute("height", v.height); }
+      k.at = c;
+      document.body.dataset.cropCount = String(Number(document.body.dataset.cropCount || 0) + 1);
+    }
+  } finally {
+    k.busy = false;
+  }
+  if (k.want) fetchCrop(k.want);
+}
+
 function showMagnifier(c, evt) {
   const m = $("magnifier"), stage = $("stage").getBoundingClientRect();
-  const span = 180 / 6 * (M.photo.width / $("photo-svg").clientWidth);
+  const span = 180 / 6;
+  fetchCrop(c);
   m.setAttribute("viewBox", `${c[0] - span / 2} ${c[1] - span / 2} ${span} ${span}`);
   const h = $("mag-h"), v = $("mag-v");
   h.setAttribute("x1", c[0] - span); h.setAttribute("x2", c[0] + span); h.setAttribute("y1", c[1]); h.setAttribute("y2", c[1]);
@@ -369,7 +425,8 @@ function initMeasure() {
   stage.addEventListener("dragover", (e) => { e.preventDefault(); stage.classList.add("drag-over"); });
   stage.addEventListener("dragleave", () => stage.classList.remove("drag-over"));
   stage.addEventListener("drop", (e) => { e.preventDefault(); stage.classList.remove("drag-over"); if (e.dataTransfer.files[0]) upload(e.dataTransfer.files[0]); });
-  $("target").addEventListener("change", () => { if (M.photo) { if ($("target").value !== "") measure(null); else { defaultCorners(); M.result = null; drawOverlay(); drawMtf(); drawFigures(); } } });
+  $("target").addEventListener("change", () => { if (M.photo) { M.chartIndex = 0; if ($("target").value !== "") { measure(null); findCharts(); } else { M.charts = []; $("chart-pick").classList.add("hidden"); defaultCorners(); M.result = null; drawOverlay(); drawMtf(); drawFigures(); } } });
+  $("chart").addEventListener("change", () => { M.chartIndex = Number($("chart").value); measure(null); });
   $("locate").addEventListener("click", () => measure(null));
   for (const id of ["method", "channel", "sweep", "pitch", "refine"]) $(id).addEventListener("change", () => { if (M.photo && (M.result || $("target").value === "")) measure(M.corners ? M.corners.map((c) => [c[0], c[1]]) : null); });
   $("overlay").addEventListener("change", overlayModel);
@@ -583,9 +640,105 @@ function initModel() {
   });
 }
 
+// ---------------------------------------------------------------- batch view
+// A `sweepmtf batch` output folder: its overview pictures, its summary table
+// (click a heading to sort, a row to see that shot's plot and region).
+const B = { data: null, sort: null, desc: false, picked: null };
+const BATCH_COLUMNS = [
+  ["file", "file", "l"], ["status", "status", "l"], ["mtf50_cy_px", "MTF50 cy/px"], ["mtf50p_cy_px", "MTF50P cy/px"],
+  ["mtf10_cy_px", "MTF10 cy/px"], ["mtf_peak", "peak"], ["mtf_nyquist", "at Nyquist"], ["f_number", "f/"],
+  ["focal_length_mm", "mm"], ["iso", "ISO"], ["lens", "lens", "l"], ["run_time_s", "s"], ["warnings", "error / warnings", "l"],
+];
+
+function batchFile(name) {
+  return `/api/batch/file?dir=${encodeURIComponent(B.data.dir)}&name=${encodeURIComponent(name)}&token=${TOKEN}`;
+}
+
+async function openBatch() {
+  const dir = $("batch-dir").value.trim();
+  if (!dir) return;
+  try {
+    B.data = await api(`/api/batch?dir=${encodeURIComponent(dir)}`);
+  } catch (e) { status(e.message, true); B.data = null; $("batch-table").innerHTML = ""; $("batch-pictures").innerHTML = ""; return; }
+  B.picked = null; B.sort = null;
+  const pics = $("batch-pictures");
+  pics.innerHTML = "";
+  for (const p of B.data.pictures) { const im = document.createElement("img"); im.src = batchFile(p); im.alt = p; pics.appendChild(im); }
+  const ok = B.data.rows.filter((r) => r[B.data.columns.indexOf("status")] === "ok").length;
+  $("batch-count").textContent = `${B.data.rows.length} shots, ${ok} measured`;
+  status(`${B.data.dir}: ${B.data.rows.length} shots`);
+  drawBatchTable();
+  document.body.dataset.batchRows = String(B.data.rows.length);
+}
+
+function drawBatchTable() {
+  const t = $("batch-table"), d = B.data;
+  t.innerHTML = "";
+  if (!d) return;
+  const col = (name) => d.columns.indexOf(name);
+  // Columns the folder has, leaving out those empty in every row (no EXIF, no lens).
+  const cols = BATCH_COLUMNS.filter(([k]) => col(k) >= 0 && (k === "file" || k === "warnings" || d.rows.some((r) => r[col(k)] !== "")));
+  const rows = d.rows.slice();
+  if (B.sort) {
+    const k = col(B.sort);
+    const num = (v) => (v === "" ? NaN : Number(v));
+    rows.sort((a, b) => {
+      const x = num(a[k]), y = num(b[k]);
+      const c = !isNaN(x) && !isNaN(y) ? x - y : isNaN(x) !== isNaN(y) ? (isNaN(x) ? 1 : -1) : String(a[k]).localeCompare(String(b[k]));
+      return B.desc ? -c : c;
+    });
+  }
+  const head = document.createElement("tr");
+  for (const [k, label, cls] of cols) {
+    const th = document.createElement("th");
+    th.textContent = label + (B.sort === k ? (B.desc ? " ▼" : " ▲") : "");
+    if (cls) th.className = cls;
+    th.addEventListener("click", () => { B.desc = B.sort === k ? !B.desc : false; B.sort = k; drawBatchTable(); });
+    head.appendChild(th);
+  }
+  const thead = document.createElement("thead"); thead.appendChild(head); t.appendChild(thead);
+  const body = document.createElement("tbody");
+  for (const r of rows) {
+    const tr = document.createElement("tr");
+    const stem = r[col("stem")];
+    if (r[col("status")] !== "ok") tr.className = "error";
+    if (stem === B.picked) tr.classList.add("picked");
+    tr.dataset.stem = stem;
+    for (const [k, , cls] of cols) {
+      const td = document.createElement("td");
+      let v = r[col(k)];
+      if (k === "warnings" && r[col("status")] !== "ok") v = r[col("error")];
+      const n = Number(v);
+      td.textContent = v !== "" && !isNaN(n) && /cy_px|peak|nyquist/.test(k) ? n.toFixed(4) : v;
+      if (cls) td.className = cls;
+      if (k === "warnings") { td.classList.add("w"); td.title = v; }
+      tr.appendChild(td);
+    }
+    tr.addEventListener("click", () => showShot(stem, r[col("file")], r[col("status")] === "ok"));
+    body.appendChild(tr);
+  }
+  t.appendChild(body);
+}
+
+function showShot(stem, file, ok) {
+  B.picked = stem;
+  $("shot-name").textContent = ok ? file : `${file}: not measured`;
+  for (const [id, name] of [["shot-mtf", `shots/${stem}.mtf.png`], ["shot-roi", `shots/${stem}.roi.png`]]) {
+    const im = $(id);
+    im.classList.toggle("hidden", !ok);
+    if (ok) { im.onload = () => { document.body.dataset.shotShown = stem; }; im.src = batchFile(name); }
+  }
+  drawBatchTable();
+}
+
+function initBatch() {
+  $("batch-open").addEventListener("click", openBatch);
+  $("batch-dir").addEventListener("keydown", (e) => { if (e.key === "Enter") openBatch(); });
+}
+
 // ---------------------------------------------------------------- start
 function showView(name) {
-  for (const v of ["measure", "model"]) {
+  for (const v of ["measure", "model", "batch"]) {
     $(`view-${v}`).classList.toggle("hidden", v !== name);
     $(`tab-${v}`).classList.toggle("active", v === name);
   }
@@ -596,12 +749,16 @@ function showView(name) {
 async function start() {
   $("tab-measure").addEventListener("click", () => showView("measure"));
   $("tab-model").addEventListener("click", () => showView("model"));
+  $("tab-batch").addEventListener("click", () => showView("batch"));
   initMeasure();
   initModel();
+  initBatch();
   try {
     await loadState();
     document.body.dataset.state = "ready";
+    if (M.state.batch_dir) { $("batch-dir").value = M.state.batch_dir; openBatch(); }
     if (M.state.photos.length) showPhoto(M.state.photos[0].id);
+    else if (M.state.batch_dir) showView("batch");
     else status("open a photo to measure");
   } catch (e) { status(e.message, true); }
 }
