@@ -232,3 +232,55 @@ fn a_raw_uploaded_from_the_page_measures_as_the_file_does() {
         "a temporary upload was left behind"
     );
 }
+
+#[test]
+fn browser_lists_two_charts_and_measures_the_one_picked() {
+    use crate::gui_browser::{Driver, find};
+    let required = std::env::var("SWEEPMTF_REQUIRE_BROWSER").is_ok_and(|v| v == "1");
+    let (Some(chromium), Some(driver)) = (
+        find(&["chromium", "chromium-browser", "google-chrome"]),
+        find(&["chromedriver"]),
+    ) else {
+        assert!(
+            !required,
+            "SWEEPMTF_REQUIRE_BROWSER=1 but chromium/chromedriver are not installed"
+        );
+        println!("skipped: no chromium and chromedriver on PATH");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (photo, _) = crate::locate_each_chart::two_charts(dir.path());
+    let target = root().join("targets/a4_log.toml");
+    let g = GuiProc::start(
+        &root(),
+        &[
+            photo.to_str().unwrap(),
+            "--target",
+            target.to_str().unwrap(),
+        ],
+    );
+    let profile = tempfile::tempdir().unwrap();
+    let d = Driver::start(&driver, &chromium, profile.path());
+    d.s("POST", "/url", json!({"url": g.url}));
+    d.wait("return document.body.dataset.charts === '2' && document.body.dataset.state === 'ready' && Number(document.body.dataset.measureCount) >= 1;", 60);
+    // Two dashed outlines; the first chart measured; pick the second.
+    assert_eq!(
+        d.js("return document.querySelectorAll('#overlay .other-chart').length;"),
+        json!(2)
+    );
+    let left = d
+        .js("return Math.max(...M.corners.map((c) => c[0]));")
+        .as_f64()
+        .unwrap();
+    assert!(left < 700.0, "chart 1 is the left one: {left}");
+    d.js("const s = document.getElementById('chart'); s.value = '1'; s.dispatchEvent(new Event('change'));");
+    d.wait("return Number(document.body.dataset.measureCount) >= 2 && document.body.dataset.state === 'ready';", 60);
+    let right = d
+        .js("return Math.min(...M.corners.map((c) => c[0]));")
+        .as_f64()
+        .unwrap();
+    assert!(right >= 700.0, "chart 2 is the right one: {right}");
+    let cmd = d.js("return document.getElementById('command').textContent;");
+    assert!(cmd.as_str().unwrap().contains("--chart-index 1"), "{cmd}");
+    d.screenshot("measure_two_charts.png");
+}
