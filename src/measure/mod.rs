@@ -28,6 +28,7 @@ pub mod law;
 pub mod lens_fit;
 pub mod lens_mtf;
 pub mod model_overlay;
+pub mod moire;
 pub mod patches;
 pub mod profile;
 pub mod synth;
@@ -294,6 +295,8 @@ pub struct Measurement {
     pub distortion: Option<DistortionFound>,
     /// Picture of the measured area.
     pub preview: Preview,
+    /// Colour moiré (R−B spread) of each sweep measured in red and blue (`--channel all`; [`moire`]).
+    pub colour_moire: Vec<moire::ColourMoire>,
 }
 
 /// Messages gathered around a measurement before its result exists: warnings
@@ -698,6 +701,13 @@ fn measure_planes_lens(
             "the target describes neither sweeps nor sine patches".into(),
         ));
     }
+    let colour_moire = moire::colour_moire(&curves);
+    if opts.channel == Channel::All && !groups.iter().any(|g| g.0 == "r") {
+        notes.push(
+            "colour moiré not measured: the photo has one channel (grey), so there is no red or blue to compare"
+                .into(),
+        );
+    }
     Ok(Measurement {
         source: String::new(),
         image_width: size.0,
@@ -714,5 +724,6 @@ fn measure_planes_lens(
         notes,
         distortion,
         preview: Preview::default(),
+        colour_moire,
     })
 }
