@@ -659,16 +659,41 @@ fn measure_planes_lens(
             continue;
         }
         for (id, strip, tlaw, contrast) in &specs {
-            let c = measure_strip(
-                &plane_refs,
-                name,
-                id,
-                strip,
-                *tlaw,
-                *contrast,
-                opts,
-                &bin_opts,
-            )?;
+            let measured = |seed: Option<PhaseLaw>| {
+                measure_strip(
+                    &plane_refs,
+                    name,
+                    id,
+                    strip,
+                    *tlaw,
+                    seed,
+                    *contrast,
+                    opts,
+                    &bin_opts,
+                )
+            };
+            // A channel whose own crossings cannot be followed (red or blue
+            // of a demosaicked mosaic, aliased from ¼ cy/px) is measured
+            // along the law an earlier channel (luma) found on the same strip.
+            let earlier = curves
+                .iter()
+                .find(|c: &&Curve| c.sweep_id == *id)
+                .map(|c| (c.channel.clone(), c.law));
+            let c = match (measured(None), earlier) {
+                (Ok(c), _) => c,
+                (
+                    Err(e @ (Failure::NoOscillation(_) | Failure::ModulationUnknown(_))),
+                    Some((by, law)),
+                ) if tlaw.is_none() => {
+                    let why = e.to_string();
+                    let c = measured(Some(law)).map_err(|_| e)?;
+                    notes.push(format!(
+                        "{name}/{id}: measured along {by}'s sweep law (its own failed: {why})"
+                    ));
+                    c
+                }
+                (Err(e), _) => return Err(e),
+            };
             if c.clipped_fraction > 0.0 {
                 warnings.push(format!(
                     "{name}/{id}: {:.2} % of the region's samples are clipped",

@@ -312,3 +312,59 @@ fn cli_simulate_demosaic_and_measure_channel_all() {
     assert!(err.contains("DNG holds the raw mosaic"), "{err}");
     assert!(!dir.path().join("bad.png").exists() && !dir.path().join("bad.dng").exists());
 }
+
+/// The demo sweep run far past Nyquist (to 0.93 cy/px on 900×600): red or
+/// blue, aliased from ¼ cy/px, may not follow a sweep law of its own; it is
+/// then measured along luma's (a note says so) instead of failing the whole
+/// measurement, and the onset still lies where the physics puts it.
+#[test]
+fn channels_that_lose_their_own_law_are_measured_along_lumas() {
+    // As `simulate --target demo:log --size 900x600 --full-well 20000
+    // --read-noise 4 --bayer RGGB --demosaic bilinear` and `measure --channel
+    // all` (which refines the corners): blue loses its own law.
+    let cam = mosaic(Camera {
+        width_px: 900,
+        height_px: 600,
+        chart_px: None,
+        seed: 0,
+        ..camera()
+    });
+    let t = sweepmtf::simulate::demo::demo_target(SweepLaw::Log);
+    let shot = render(&t, &system(), &cam).unwrap();
+    let bytes = shot.encode(PhotoFormat::Png).unwrap();
+    let r = shot.roi().unwrap();
+    let dec = decode_bytes(&bytes, "moire").unwrap();
+    let opts = MeasureOptions {
+        roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
+        channel: Channel::All,
+        refine_roi: true,
+        ..MeasureOptions::default()
+    };
+    let m = measure_decoded(&dec, "moire", None, &opts).unwrap();
+    // The same without the fallback: that channel fails on its own.
+    let alone = measure_decoded(
+        &dec,
+        "moire",
+        None,
+        &MeasureOptions {
+            channel: Channel::B,
+            ..opts.clone()
+        },
+    );
+    assert!(alone.is_err(), "blue alone measured");
+    assert_eq!(channels(&m), ["luma", "r", "g", "b"]);
+    let borrowed: Vec<&String> = m
+        .notes
+        .iter()
+        .filter(|n| n.contains("measured along luma's sweep law"))
+        .collect();
+    let cm = &m.colour_moire[0];
+    eprintln!(
+        "demo sweep to 0.93 cy/px: max {:?} at {:?}, onset {:?}; {borrowed:?}",
+        cm.max_spread, cm.max_at_cy_px, cm.onset_cy_px
+    );
+    assert_eq!(borrowed.len(), 1, "{:?}", m.notes);
+    assert!(borrowed[0].contains("b/strip"), "{borrowed:?}");
+    let onset = cm.onset_cy_px.expect("an onset");
+    assert!((0.2..=0.3).contains(&onset), "onset {onset}");
+}
