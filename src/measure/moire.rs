@@ -273,8 +273,8 @@ mod tests {
             .map(|(i, &f)| (f, if i == 30 { 1.0 } else { 0.8 }))
             .collect();
         let cm = colour_moire(&[
-            curve("r", &r, 0.02 / 2f64.sqrt()),
-            curve("b", &b, 0.02 / 2f64.sqrt()),
+            curve("r", &r, 0.04 / 2f64.sqrt()),
+            curve("b", &b, 0.04 / 2f64.sqrt()),
         ]);
         assert_eq!(cm[0].onset_cy_px, None);
         assert!((cm[0].max_spread.unwrap() - 0.2 / 3.0).abs() < 1e-9);
