@@ -95,12 +95,29 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
     if !m.patches.is_empty() {
         parts.push(format!("{} sine patches", m.patches.len()));
     }
+    if let Some(cm) = m.colour_moire.first() {
+        parts.push(moire_phrase(cm));
+    }
     format!(
         "{name}: {} [{}] -> {}",
         parts.join("; "),
         m.method.name(),
         csv_path.display()
     )
+}
+
+/// "colour moiré: R−B spread max 0.214 at 0.262 cy/px, onset 0.231 cy/px" (the first sweep's).
+fn moire_phrase(cm: &sweepmtf::measure::moire::ColourMoire) -> String {
+    let max = match (cm.max_spread, cm.max_at_cy_px) {
+        (Some(v), Some(f)) => format!("R−B spread max {v:.3} at {f:.3} cy/px"),
+        _ => "R−B spread not measured".to_string(),
+    };
+    let onset = match (cm.onset_cy_px, cm.measured_to_cy_px) {
+        (Some(f), _) => format!("onset {f:.3} cy/px"),
+        (None, Some(to)) => format!("no onset up to {to:.3} cy/px"),
+        (None, None) => "no onset".to_string(),
+    };
+    format!("colour moiré: {max}, {onset}")
 }
 
 /// The error for a failed measurement; when automatic location found no chart,

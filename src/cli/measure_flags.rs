@@ -46,7 +46,8 @@ pub struct MeasureFlags {
     /// Tone curve: `chart` measures it from the target's grey/density patches.
     #[arg(long, value_name = "chart", value_parser = parse_tone)]
     pub tone: Option<bool>,
-    /// Channel: luma | r | g | b | all (raws: the green sites unless r, b or all).
+    /// Channel: luma | r | g | b | all (luma, r, g, b together, with the R−B colour moiré;
+    /// raws: the green sites unless r, b or all).
     #[arg(long, default_value = "luma", value_name = "CH", value_parser = parse_channel)]
     pub channel: Channel,
     /// Pixel pitch with a unit (e.g. 4.3um), for cycles/mm on the sensor; default: from the EXIF.

@@ -100,6 +100,10 @@ pub struct Args {
     /// camera-raw DNG when the output name ends in .dng).
     #[arg(long, value_name = "ORDER")]
     pub bayer: Option<String>,
+    /// Demosaic the --bayer mosaic into a white-balanced RGB photo (bilinear, as a camera's
+    /// fast path), written in --encoding and --bits as PNG, TIFF or JPEG.
+    #[arg(long, value_name = "bilinear")]
+    pub demosaic: Option<String>,
     /// Seed of the temporal noise.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
@@ -220,6 +224,16 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
         .as_deref()
         .map(|b| b.parse::<BayerOrder>().map_err(usage))
         .transpose()?;
+    let demosaic = a
+        .demosaic
+        .as_deref()
+        .map(|d| d.parse::<simulate::Demosaic>().map_err(usage))
+        .transpose()?;
+    if demosaic.is_some() && bayer.is_none() {
+        return Err(usage(
+            "--demosaic needs a mosaic: give --bayer RGGB (or BGGR, GRBG, GBRG) too",
+        ));
+    }
     let pixel_aperture = match a.pixel_aperture.as_str() {
         "auto" => PixelAperture::Auto,
         "square" => PixelAperture::Square,
@@ -281,6 +295,7 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
         bits: a.bits,
         jpeg_quality: a.jpeg,
         bayer,
+        demosaic,
         pixel_aperture,
         distortion,
         sharpen,

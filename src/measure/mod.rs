@@ -28,6 +28,7 @@ pub mod law;
 pub mod lens_fit;
 pub mod lens_mtf;
 pub mod model_overlay;
+pub mod moire;
 pub mod patches;
 pub mod profile;
 pub mod synth;
@@ -294,6 +295,8 @@ pub struct Measurement {
     pub distortion: Option<DistortionFound>,
     /// Picture of the measured area.
     pub preview: Preview,
+    /// Colour moiré (R−B spread) of each sweep measured in red and blue (`--channel all`; [`moire`]).
+    pub colour_moire: Vec<moire::ColourMoire>,
 }
 
 /// Messages gathered around a measurement before its result exists: warnings
@@ -673,16 +676,41 @@ fn measure_planes_lens(
             continue;
         }
         for (id, strip, tlaw, contrast) in &specs {
-            let c = measure_strip(
-                &plane_refs,
-                name,
-                id,
-                strip,
-                *tlaw,
-                *contrast,
-                opts,
-                &bin_opts,
-            )?;
+            let measured = |seed: Option<PhaseLaw>| {
+                measure_strip(
+                    &plane_refs,
+                    name,
+                    id,
+                    strip,
+                    *tlaw,
+                    seed,
+                    *contrast,
+                    opts,
+                    &bin_opts,
+                )
+            };
+            // A channel whose own crossings cannot be followed (red or blue
+            // of a demosaicked mosaic, aliased from ¼ cy/px) is measured
+            // along the law an earlier channel (luma) found on the same strip.
+            let earlier = curves
+                .iter()
+                .find(|c: &&Curve| c.sweep_id == *id)
+                .map(|c| (c.channel.clone(), c.law));
+            let c = match (measured(None), earlier) {
+                (Ok(c), _) => c,
+                (
+                    Err(e @ (Failure::NoOscillation(_) | Failure::ModulationUnknown(_))),
+                    Some((by, law)),
+                ) if tlaw.is_none() => {
+                    let why = e.to_string();
+                    let c = measured(Some(law)).map_err(|_| e)?;
+                    notes.push(format!(
+                        "{name}/{id}: measured along {by}'s sweep law (its own failed: {why})"
+                    ));
+                    c
+                }
+                (Err(e), _) => return Err(e),
+            };
             if c.clipped_fraction > 0.0 {
                 warnings.push(format!(
                     "{name}/{id}: {:.2} % of the region's samples are clipped",
@@ -715,6 +743,13 @@ fn measure_planes_lens(
             "the target describes neither sweeps nor sine patches".into(),
         ));
     }
+    let colour_moire = moire::colour_moire(&curves);
+    if opts.channel == Channel::All && !groups.iter().any(|g| g.0 == "r") {
+        notes.push(
+            "colour moiré not measured: the photo has one channel (grey), so there is no red or blue to compare"
+                .into(),
+        );
+    }
     Ok(Measurement {
         source: String::new(),
         image_width: size.0,
@@ -731,5 +766,6 @@ fn measure_planes_lens(
         notes,
         distortion,
         preview: Preview::default(),
+        colour_moire,
     })
 }

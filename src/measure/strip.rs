@@ -17,7 +17,9 @@ use rayon::prelude::*;
 /// Refuse when more than this fraction of the region is clipped.
 const CLIP_REFUSE: f64 = 0.02;
 
-/// Measures one strip of one plane.
+/// Measures one strip of one plane; without a target law, `seed` (another
+/// channel's law of the same strip), when given, is refined instead of a law
+/// found from this plane's own crossings.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn measure_strip(
     planes: &[&Plane],
@@ -25,6 +27,7 @@ pub(super) fn measure_strip(
     id: &str,
     strip: &Strip,
     target_law: Option<PhaseLaw>,
+    seed: Option<PhaseLaw>,
     contrast: Option<f64>,
     opts: &MeasureOptions,
     bin_opts: &BinOptions,
@@ -69,7 +72,7 @@ pub(super) fn measure_strip(
         (None, SweepChoice::Auto) => None,
     };
     let mut laws: Vec<PhaseLaw> = Vec::new();
-    if let Some(l) = target_law {
+    if let Some(l) = target_law.or(seed) {
         laws.push(l);
     } else {
         let kinds: &[LawKind] = match &kind {

@@ -6,7 +6,8 @@
 //! ([`ToneCurve::from_patches`]). Every tone is applied through a lookup table
 //! (256 or 65536 entries), and only over the requested crop, so that a large
 //! photo is never converted to floating point as a whole. The channel is the
-//! luminance of linear RGB (Rec. 709 weights), one of r, g, b, or all three.
+//! luminance of linear RGB (Rec. 709 weights), one of r, g, b, or all four
+//! (luma, r, g, b) together.
 
 use super::Plane;
 use super::decode::{Decoded, Samples};
@@ -50,7 +51,7 @@ pub enum Channel {
     G,
     /// Blue.
     B,
-    /// One plane per colour channel.
+    /// Luminance and one plane per colour channel (luma, r, g, b), measured together.
     All,
 }
 
@@ -210,7 +211,7 @@ pub fn plane_names(channel: Channel, channels: usize) -> Vec<&'static str> {
         (Channel::R, _) => vec!["r"],
         (Channel::G, _) => vec!["g"],
         (Channel::B, _) => vec!["b"],
-        (Channel::All, _) => vec!["r", "g", "b"],
+        (Channel::All, _) => vec!["luma", "r", "g", "b"],
     }
 }
 
@@ -277,7 +278,9 @@ fn mixes(channel: Channel, nc: usize) -> Vec<Vec<(usize, f32)>> {
             Channel::R => vec![vec![(0, 1.0)]],
             Channel::G => vec![vec![(1, 1.0)]],
             Channel::B => vec![vec![(2, 1.0)]],
-            Channel::All => (0..3).map(|c| vec![(c, 1.0)]).collect(),
+            Channel::All => std::iter::once((0..3).map(|c| (c, LUMA_WEIGHTS[c])).collect())
+                .chain((0..3).map(|c| vec![(c, 1.0)]))
+                .collect(),
             Channel::Luma => vec![(0..3).map(|c| (c, LUMA_WEIGHTS[c])).collect()],
         }
     }
@@ -398,8 +401,10 @@ mod tests {
         assert!((p[0].get(1, 1) - 0.215_861).abs() < 1e-5);
         assert_eq!(p[0].centre(1, 1), (2.5, 1.5));
         let all = planes(&dec, crop, &Tone::Gamma(1.0), Channel::All);
-        assert_eq!(all.len(), 3);
-        assert_eq!(all[2].get(1, 0), 1.0);
+        assert_eq!(all.len(), 4);
+        assert_eq!(plane_names(Channel::All, 3), ["luma", "r", "g", "b"]);
+        assert!((all[0].get(1, 0) - 0.0722).abs() < 1e-6);
+        assert_eq!(all[3].get(1, 0), 1.0);
     }
 
     #[test]

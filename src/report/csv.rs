@@ -18,7 +18,8 @@ fn num(v: f64) -> String {
 }
 
 /// The sweep curves as CSV: `freq_cy_px,mtf,[freq_cy_mm,]freq_lw_ph,modulation,mtf_err,aliased`
-/// (+ `freq_chart_cy_mm` with a target, + `channel,sweep` when there are several curves).
+/// (+ `freq_chart_cy_mm` with a target, + `channel,sweep` when there are several curves,
+/// + `rb_spread` with colour moiré: |MTF_R − MTF_B| on the red rows, empty on the others).
 pub fn curves_csv(m: &Measurement) -> Vec<u8> {
     let pitch = m.pixel_pitch_mm;
     let several = m.curves.len() > 1;
@@ -35,8 +36,17 @@ pub fn curves_csv(m: &Measurement) -> Vec<u8> {
     if several {
         head.extend(["channel", "sweep"]);
     }
+    let moire = !m.colour_moire.is_empty();
+    if moire {
+        head.push("rb_spread");
+    }
     let _ = w.write_record(&head);
     for c in &m.curves {
+        // The R−B spread sits on the red rows (it is computed at red's points).
+        let spread = m
+            .colour_moire
+            .iter()
+            .find(|cm| c.channel == "r" && cm.sweep_id == c.sweep_id);
         for p in &c.points {
             let mut row = vec![num(p.freq_cy_px), num(p.mtf)];
             if let Some(f) = cy_mm(p.freq_cy_px, pitch) {
@@ -52,6 +62,14 @@ pub fn curves_csv(m: &Measurement) -> Vec<u8> {
             if several {
                 row.push(c.channel.clone());
                 row.push(c.sweep_id.clone());
+            }
+            if moire {
+                row.push(
+                    spread
+                        .and_then(|cm| cm.points.iter().find(|q| q.freq_cy_px == p.freq_cy_px))
+                        .map(|q| num(q.spread))
+                        .unwrap_or_default(),
+                );
             }
             let _ = w.write_record(&row);
         }

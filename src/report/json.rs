@@ -1,7 +1,8 @@
 //! The JSON summary of a measurement: MTF50/30/20/10 and MTF50P/20P/10P (nn %
 //! of the peak, searched from the peak upward) in every known unit, the peak
 //! (value, frequency, whether it is a sharpening peak), MTF at Nyquist,
-//! method, chart modulation and its source, warnings, timings.
+//! method, chart modulation and its source, warnings, timings; with red and
+//! blue curves, the colour moiré block (`colour_moire`).
 
 use super::csv::lw_ph;
 use crate::measure::Measurement;
@@ -104,6 +105,9 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
         "warnings": m.warnings,
         "notes": m.notes,
     });
+    if let Some(cm) = colour_moire(m) {
+        v["colour_moire"] = cm;
+    }
     if let Some(t) = t {
         v["timings_ms"] = json!({
             "decode_and_measure": t.measure_ms,
@@ -111,6 +115,32 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
         });
     }
     v
+}
+
+/// The `colour_moire` block: the definition, the thresholds, the first
+/// sweep's figures at the top and every sweep's in `sweeps`; None when no
+/// sweep was measured in both red and blue.
+fn colour_moire(m: &Measurement) -> Option<Value> {
+    use crate::measure::moire::{DEFINITION, ONSET_RUN, ONSET_SIGMAS, ONSET_SPREAD};
+    let first = m.colour_moire.first()?;
+    let one = |c: &crate::measure::moire::ColourMoire| {
+        json!({
+            "sweep": c.sweep_id,
+            "max_spread": c.max_spread,
+            "max_spread_err": c.max_spread_err,
+            "max_at_cy_px": c.max_at_cy_px,
+            "onset_cy_px": c.onset_cy_px,
+            "measured_to_cy_px": c.measured_to_cy_px,
+            "points": c.points.len(),
+        })
+    };
+    let mut v = one(first);
+    v["definition"] = json!(DEFINITION);
+    v["onset_spread"] = json!(ONSET_SPREAD);
+    v["onset_sigmas"] = json!(ONSET_SIGMAS);
+    v["onset_run_points"] = json!(ONSET_RUN);
+    v["sweeps"] = Value::Array(m.colour_moire.iter().map(one).collect());
+    Some(v)
 }
 
 /// The summary as pretty-printed JSON bytes.

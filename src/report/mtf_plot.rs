@@ -3,7 +3,7 @@
 //! the Nyquist frequency and MTF50 marked (with a sharpening peak, the peak
 //! and MTF50P too, when MTF50P differs from MTF50); sine patches as points with error
 //! bars; with a model, dashed model curves and a hollow ring at each patch's
-//! model value. PNG or SVG.
+//! model value; with colour moiré, a panel below for the R−B spread. PNG or SVG.
 
 use super::atomic::ReportError;
 use super::model_overlay::PlotExtras;
@@ -29,6 +29,12 @@ const COLOURS: [RGBColor; 4] = [
     RGBColor(148, 103, 189),
 ];
 
+/// The luma curve among colour channels: near black.
+const LUMA_COLOUR: RGBColor = RGBColor(40, 40, 40);
+/// The colour-moiré panel: its height (pixels) and the spread's colour (magenta).
+const MOIRE_H: i32 = 170;
+const MOIRE_COLOUR: RGBColor = RGBColor(200, 30, 160);
+
 /// One colour per curve. When the curves are several colour channels of a
 /// photo or raw (`--channel all`), each takes its channel's hue (r red, g
 /// green, b blue), lighter for each further sweep (in order of appearance:
@@ -39,6 +45,7 @@ fn curve_colours(curves: &[(&str, &str)]) -> Vec<RGBColor> {
         "r" => Some(COLOURS[1]),
         "g" => Some(COLOURS[2]),
         "b" => Some(COLOURS[0]),
+        "luma" => Some(LUMA_COLOUR),
         _ => None,
     };
     let mut channels: Vec<&str> = curves.iter().map(|c| c.0).collect();
@@ -154,6 +161,16 @@ where
         None => "spatial frequency (cycles/pixel)".to_string(),
     };
     let root = &super::model_overlay::caption_area(root, &extras.caption).map_err(err)?;
+    // With colour moiré, a panel below the MTF for the R−B spread.
+    let moire = m.colour_moire.iter().any(|c| !c.points.is_empty());
+    let (upper, lower) = if moire {
+        let h = root.dim_in_pixel().1 as i32;
+        let (a, b) = root.split_vertically(h - MOIRE_H);
+        (a, Some(b))
+    } else {
+        (root.clone(), None)
+    };
+    let root = &upper;
     let mut chart = ChartBuilder::on(root)
         .caption(title, (crate::plot::FONT, 22))
         .margin(14)
@@ -306,6 +323,128 @@ where
     chart
         .configure_series_labels()
         .label_font((crate::plot::FONT, 15))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    if let Some(lower) = &lower {
+        draw_moire_panel(lower, m, xmax)?;
+    }
+    Ok(())
+}
+
+/// The colour-moiré panel: the R−B spread |MTF_R − MTF_B| of each sweep (thin
+/// magenta line over its ±1σ band), the onset threshold (dotted) and the
+/// onset (a vertical line with its label).
+fn draw_moire_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    m: &Measurement,
+    xmax: f64,
+) -> Result<(), ReportError>
+where
+    DB::ErrorType: 'static,
+{
+    use crate::measure::moire::ONSET_SPREAD;
+    let top = m
+        .colour_moire
+        .iter()
+        .flat_map(|c| c.points.iter().filter(|p| p.freq_cy_px <= xmax))
+        .map(|p| p.spread)
+        .fold(2.0 * ONSET_SPREAD, f64::max);
+    let ymax = (1.15 * top).min(1.5);
+    let mut chart = ChartBuilder::on(area)
+        .margin_left(14)
+        .margin_right(14)
+        .margin_bottom(6)
+        .x_label_area_size(30)
+        .y_label_area_size(56)
+        .build_cartesian_2d(0.0..xmax, 0.0..ymax)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .y_desc("|MTF_R − MTF_B|")
+        .y_labels(4)
+        .label_style((crate::plot::FONT, 13))
+        .axis_desc_style((crate::plot::FONT, 14))
+        .draw()
+        .map_err(err)?;
+    let grey = RGBColor(120, 120, 120);
+    chart
+        .draw_series(DashedLineSeries::new(
+            [(0.0, ONSET_SPREAD), (xmax, ONSET_SPREAD)],
+            3,
+            4,
+            grey.stroke_width(1),
+        ))
+        .map_err(err)?;
+    for (k, c) in m.colour_moire.iter().enumerate() {
+        let col = if k == 0 {
+            MOIRE_COLOUR
+        } else {
+            let f = [1.0, 0.6, 0.35][k.min(2)];
+            let mix = |v: u8| (f * v as f64 + (1.0 - f) * 255.0).round() as u8;
+            RGBColor(
+                mix(MOIRE_COLOUR.0),
+                mix(MOIRE_COLOUR.1),
+                mix(MOIRE_COLOUR.2),
+            )
+        };
+        let pts: Vec<_> = c.points.iter().filter(|p| p.freq_cy_px <= xmax).collect();
+        if pts.len() >= 2 {
+            let mut poly: Vec<(f64, f64)> = pts
+                .iter()
+                .map(|p| (p.freq_cy_px, (p.spread + p.spread_err).min(ymax)))
+                .collect();
+            poly.extend(
+                pts.iter()
+                    .rev()
+                    .map(|p| (p.freq_cy_px, (p.spread - p.spread_err).max(0.0))),
+            );
+            chart
+                .draw_series(std::iter::once(Polygon::new(poly, col.mix(0.2).filled())))
+                .map_err(err)?;
+        }
+        let label = if m.colour_moire.len() > 1 {
+            format!("R−B spread {}", c.sweep_id)
+        } else {
+            "R−B spread (colour moiré)".to_string()
+        };
+        chart
+            .draw_series(LineSeries::new(
+                pts.iter().map(|p| (p.freq_cy_px, p.spread.min(ymax))),
+                col.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], col.stroke_width(2)));
+        let text = match c.onset_cy_px {
+            Some(f) => {
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        [(f, 0.0), (f, ymax)],
+                        col.stroke_width(1),
+                    )))
+                    .map_err(err)?;
+                format!("onset {f:.3} cy/px")
+            }
+            None => "no onset".to_string(),
+        };
+        let max = match (c.max_spread, c.max_at_cy_px) {
+            (Some(v), Some(f)) => format!(", max {v:.3} at {f:.3} cy/px"),
+            _ => String::new(),
+        };
+        chart
+            .draw_series(std::iter::once(Text::new(
+                format!("{text}{max}"),
+                (0.01 * xmax, ymax * (0.93 - 0.16 * k as f64)),
+                (crate::plot::FONT, 14).into_font().color(&col),
+            )))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font((crate::plot::FONT, 13))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(SeriesLabelPosition::UpperRight)

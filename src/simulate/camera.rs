@@ -259,6 +259,9 @@ pub struct Camera {
     pub bayer: Option<BayerOrder>,
     /// Relative gains of the R, G, B photosites of the mosaic (white balance as shot).
     pub bayer_gains: [f64; 3],
+    /// Demosaic the mosaic into an RGB photo (white-balanced, in `encoding` and
+    /// `bits`, any format but DNG); `None` = write the raw mosaic.
+    pub demosaic: Option<super::demosaic::Demosaic>,
     /// Radial lens distortion (PTLens form, radius normalised by half the
     /// frame's smaller side; see [`crate::distortion`]); `None` = a perfect
     /// rectilinear lens.
@@ -305,6 +308,7 @@ impl Default for Camera {
             jpeg_quality: None,
             bayer: None,
             bayer_gains: [0.55, 1.0, 0.75],
+            demosaic: None,
             distortion: None,
             sharpen: None,
             light_gradient: None,
@@ -328,14 +332,19 @@ impl Camera {
         }
     }
 
-    /// Bits per stored sample: `bits`, or 16 for a Bayer mosaic.
-    pub fn stored_bits(&self) -> u8 {
-        if self.bayer.is_some() { 16 } else { self.bits }
+    /// Whether the photo is a raw Bayer mosaic (a mosaic not demosaicked).
+    pub fn raw_mosaic(&self) -> bool {
+        self.bayer.is_some() && self.demosaic.is_none()
     }
 
-    /// The transfer curve actually stored: `encoding`, or linear for a Bayer mosaic.
+    /// Bits per stored sample: `bits`, or 16 for a raw Bayer mosaic.
+    pub fn stored_bits(&self) -> u8 {
+        if self.raw_mosaic() { 16 } else { self.bits }
+    }
+
+    /// The transfer curve actually stored: `encoding`, or linear for a raw Bayer mosaic.
     pub fn stored_encoding(&self) -> Encoding {
-        if self.bayer.is_some() {
+        if self.raw_mosaic() {
             Encoding::Linear
         } else {
             self.encoding
@@ -450,8 +459,11 @@ impl Camera {
         {
             return bad(format!("JPEG quality {q} must lie in 1–100"));
         }
+        if self.demosaic.is_some() && self.bayer.is_none() {
+            return bad("demosaicking needs a mosaic: give --bayer RGGB (or another order)".into());
+        }
         if self.bayer.is_some() {
-            if self.jpeg_quality.is_some() {
+            if self.jpeg_quality.is_some() && self.demosaic.is_none() {
                 return bad(
                     "a Bayer mosaic is written as 16-bit linear PNG or TIFF, not JPEG".into(),
                 );

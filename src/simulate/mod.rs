@@ -18,6 +18,7 @@
 
 pub mod camera;
 pub mod demo;
+pub mod demosaic;
 pub mod dng;
 pub mod encode;
 pub mod noise;
@@ -27,6 +28,7 @@ pub mod render;
 pub mod truth;
 
 pub use camera::{BayerOrder, Camera, Encoding, PixelAperture, RenderSettings};
+pub use demosaic::Demosaic;
 pub use encode::PhotoFormat;
 pub use nuisance::{Chroma, LightGradient, Sharpen};
 pub use truth::{PatchTruth, SweepTruth, TruthRow};
@@ -81,9 +83,10 @@ pub struct Shot {
     /// camera sharpens; without the light's colour.
     pub signal: Vec<f32>,
     /// The recorded linear image: signal with noise (then sharpened), clipped
-    /// to [0, 1]; what is encoded (for a colour shot: its green channel).
+    /// to [0, 1]; what is encoded (for a colour or demosaicked shot: its green channel).
     pub linear: Vec<f32>,
-    /// A colour shot's recorded linear R, G, B planes (as `linear`); `None` = grey.
+    /// A colour shot's recorded linear R, G, B planes (as `linear`; a
+    /// demosaicked mosaic's after white balance); `None` = grey.
     pub colour: Option<[Vec<f32>; 3]>,
     /// Chart (mm) → image (px) before lens distortion (see `camera.distortion`).
     pub chart_to_image: Homography,
@@ -137,6 +140,7 @@ impl Shot {
             "homography_chart_to_image": self.chart_to_image.m,
             "chart_modulation": self.sweeps.first().map(|s| s.chart_contrast),
             "bayer": c.bayer.map(|b| b.to_string()),
+            "demosaic": c.demosaic.map(|d| d.to_string()),
             "distortion": c.distortion.map(|d| d.to_string()),
             "distortion_corner_percent": c.lens().map(|l| l.corner_percent()),
             "encoding": c.stored_encoding().to_string(),
@@ -199,7 +203,12 @@ pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot,
             *v = (*v as f64 * g) as f32;
         }
     });
-    let (linear, colour) = record(camera, &signal);
+    let (mut linear, mut colour) = record(camera, &signal);
+    if let (Some(order), Some(Demosaic::Bilinear)) = (camera.bayer, camera.demosaic) {
+        let rgb = demosaic::bilinear(&linear, w, order, camera.bayer_gains);
+        linear = rgb[1].clone();
+        colour = Some(rgb);
+    }
     if let Some(sh) = &camera.sharpen {
         sh.apply(&mut signal, w);
     }
@@ -346,8 +355,11 @@ pub fn check_output(camera: &Camera, path: &Path) -> Result<PhotoFormat, SimErro
     let format = PhotoFormat::from_path(path)?;
     let shown = path.display();
     match format {
-        PhotoFormat::Jpeg if camera.bayer.is_some() => Err(SimError::Parameter(format!(
-            "{shown}: a Bayer mosaic is written as 16-bit linear PNG or TIFF, not JPEG"
+        PhotoFormat::Jpeg if camera.raw_mosaic() => Err(SimError::Parameter(format!(
+            "{shown}: a Bayer mosaic is written as 16-bit linear PNG or TIFF, not JPEG (or give --demosaic bilinear)"
+        ))),
+        PhotoFormat::Dng if camera.demosaic.is_some() => Err(SimError::Parameter(format!(
+            "{shown}: a DNG holds the raw mosaic; leave out --demosaic or write .png, .tif or .jpg"
         ))),
         PhotoFormat::Jpeg if camera.bits != 8 => Err(SimError::Parameter(format!(
             "{shown}: JPEG stores 8 bits; use --bits 8 or a .png/.tif name"

@@ -16,6 +16,7 @@ mod batch_run;
 mod batch_shard;
 mod chart_output;
 mod chart_sinemtf;
+mod colour_moire;
 mod exif_jpeg;
 mod fuzz_slice;
 mod gui_api;
