@@ -1,6 +1,6 @@
 //! Measurement of MTF from a photo of a sine chart: the region (`--roi`, with
 //! or without a target description) → [`profile`] binning without resampling
-//! → phase-law fit ([`law`]) → modulation ([`estimate`]) → MTF curve with
+//! → phase-law first guess ([`law_guess`]) and fit ([`law`]) → modulation ([`estimate`]) → MTF curve with
 //! aliasing flags, normalisation and summary figures ([`curve`]); sine-patch
 //! targets give one result per patch ([`patches`]).
 //!
@@ -25,6 +25,7 @@ pub mod estimate;
 pub mod figures;
 pub mod in_memory;
 pub mod law;
+pub mod law_guess;
 pub mod lens_fit;
 pub mod lens_mtf;
 pub mod model_overlay;

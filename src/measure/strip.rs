@@ -9,7 +9,7 @@ use super::estimate::fit::PhaseTable;
 use super::frequency::{dev_at, local_freq_deviation, output_grid, refine_law};
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
-use super::{curve, law, normalise};
+use super::{curve, law_guess, normalise};
 use crate::geometry::Point;
 use crate::photo::Plane;
 use rayon::prelude::*;
@@ -79,7 +79,7 @@ pub(super) fn measure_strip(
             Some(k) => std::slice::from_ref(k),
             None => &[LawKind::Linear, LawKind::Log],
         };
-        if let Some((found, _)) = law::initial_laws(&prof, kinds, s_per_px, 0.3) {
+        if let Some((found, _)) = law_guess::initial_laws(&prof, kinds, s_per_px, 0.3) {
             // A family that fits the crossings 4× worse than the best is not refined.
             let best = found.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
             laws.extend(

@@ -7,7 +7,8 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 use super::{Estimator, ModPoint, bin_attenuation};
-use crate::measure::law::{PhaseLaw, moving_mean_frac, uniform_dense};
+use crate::measure::law::PhaseLaw;
+use crate::measure::law_guess::{moving_mean_frac, uniform_dense};
 use crate::measure::profile::Profile;
 use num_complex::Complex64;
 use realfft::RealFftPlanner;
