@@ -10,15 +10,13 @@
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::distortion::{Lens, Ptlens};
+use crate::distortion::Lens;
 use crate::geometry::Point;
 use crate::photo::Plane;
-use crate::photo::decode::{DecodeError, Decoded, decode_file};
+use crate::photo::decode::{Decoded, decode_file};
 use crate::photo::linearise::{Channel, Crop, file_tone, planes};
-use crate::target::{Target, TargetError};
-use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
-use thiserror::Error;
+use crate::target::Target;
+use std::path::Path;
 
 pub mod curve;
 pub mod estimate;
@@ -37,8 +35,10 @@ pub mod synth;
 mod frame;
 mod frequency;
 mod normalise;
+mod options;
 mod preview;
 mod region;
+mod result;
 mod strip;
 mod tone;
 
@@ -46,8 +46,15 @@ pub use curve::{Figures, MtfPoint};
 pub use estimate::Method;
 pub use law::{LawKind, PhaseLaw};
 pub use lens_fit::{DistortionFound, DistortionSource};
+use options::check_options;
+pub use options::{
+    MAX_CHART_REL_ERR, MAX_LAW_RMS_CYCLES, MIN_ACROSS_PX, MeasureOptions, REFINE_SEARCH_PX,
+    SweepChoice,
+};
 pub use patches::PatchResult;
 pub use region::{charts_in, rect_strip, target_homography};
+pub use result::{Curve, Failure, MeasureError, Measurement, Preview};
+pub(crate) use result::{DAMAGE_MARK, Said};
 
 use frame::{
     decode_bytes_with_pitch, decode_with_pitch, measure_decoded_at, measure_frame_at, read_photo,
@@ -58,296 +65,6 @@ use region::{
     refine_or_keep, resolve_roi, strips,
 };
 use strip::measure_strip;
-/// Which sweep law to fit when no target description gives it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum SweepChoice {
-    /// Try linear and log, keep the better fit.
-    #[default]
-    Auto,
-    /// Linear sweep.
-    Linear,
-    /// Logarithmic sweep.
-    Log,
-}
-
-/// Options of a measurement (the CLI's flags, ready to use).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct MeasureOptions {
-    /// Region corners in image pixels: one strip (without a target) or the whole target frame (with one).
-    pub roi: Option<[Point; 4]>,
-    /// Target description file (chart TOML or sineMTF tgt.txt).
-    pub target: Option<PathBuf>,
-    /// Modulation estimator.
-    pub method: Method,
-    /// Sweep law to fit without a target.
-    pub sweep: SweepChoice,
-    /// Power-law tone (`--gamma`); None = the default for the bit depth.
-    pub gamma: Option<f64>,
-    /// Tone curve from the target's grey patches (`--tone chart`).
-    pub tone_chart: bool,
-    /// Channel(s) to measure.
-    pub channel: Channel,
-    /// Pixel pitch (mm), when known, for cycles/mm on the sensor.
-    pub pixel_pitch_mm: Option<f64>,
-    /// Bin width (pixels).
-    pub bin_px: f64,
-    /// Fraction of the strip width left out along each long edge.
-    pub margin: f64,
-    /// Estimator window (cycles).
-    pub window_cycles: f64,
-    /// Which chart to measure when automatic location finds several (0 = leftmost).
-    pub chart_index: Option<usize>,
-    /// Refine the given `roi` corners to the region's edges (corners good to about
-    /// ±[`REFINE_SEARCH_PX`]); when the edges are not clearly seen, the corners are
-    /// used as given, with a warning.
-    pub refine_roi: bool,
-    /// Raw Bayer files: scale the second green lattice to the first's level
-    /// before binning the greens together ([`crate::photo::raw::balance_greens`]).
-    pub green_balance: bool,
-    /// The lens's radial distortion, when known (PTLens a, b, c as Lensfun
-    /// publishes them; [`crate::distortion`]). Photo corners are undistorted
-    /// before the strip's homography and every pixel centre is binned
-    /// through the model.
-    pub distortion: Option<Ptlens>,
-    /// Without `distortion`: estimate it from the strip's straight long edges
-    /// ([`lens_fit`]) and use it only when the evidence is clear (default on;
-    /// off measures as without distortion).
-    pub estimate_distortion: bool,
-}
-
-/// Quality gate: least strip width inside the margins (px) for a curve.
-pub const MIN_ACROSS_PX: f64 = 3.0;
-/// Quality gate: largest RMS phase residual of the fitted sweep law (cycles).
-pub const MAX_LAW_RMS_CYCLES: f64 = 0.15;
-/// Quality gate: largest relative uncertainty of an extrapolated chart modulation.
-pub const MAX_CHART_REL_ERR: f64 = 0.03;
-
-/// How far (px) `refine_roi` searches around each given corner.
-pub const REFINE_SEARCH_PX: f64 = 8.0;
-
-impl Default for MeasureOptions {
-    fn default() -> Self {
-        MeasureOptions {
-            roi: None,
-            target: None,
-            method: Method::Fit,
-            sweep: SweepChoice::Auto,
-            gamma: None,
-            tone_chart: false,
-            channel: Channel::Luma,
-            pixel_pitch_mm: None,
-            bin_px: 0.25,
-            margin: 0.15,
-            window_cycles: 4.0,
-            chart_index: None,
-            refine_roi: false,
-            green_balance: true,
-            distortion: None,
-            estimate_distortion: true,
-        }
-    }
-}
-
-/// Why a measurement failed (the cause; [`MeasureError`] adds the file).
-#[derive(Debug, Error)]
-pub enum Failure {
-    /// The photo could not be decoded.
-    #[error("{0}")]
-    Decode(#[from] DecodeError),
-    /// A camera raw file could not be decoded (the message names the file).
-    #[error("{0}")]
-    Raw(String),
-    /// The target description could not be used.
-    #[error("{0}")]
-    Target(#[from] TargetError),
-    /// An option value is unusable.
-    #[error("{0}")]
-    Options(String),
-    /// No region was given and it cannot be found automatically.
-    #[error("no --roi given and automatic location is not available")]
-    NoRoi,
-    /// The region is unusable (outside the image, degenerate, self-crossing).
-    #[error("region unusable: {0}")]
-    Region(String),
-    /// The region is too small for a measurement.
-    #[error("region too small: {0}")]
-    TooSmall(String),
-    /// Too much of the region is clipped.
-    #[error(
-        "the sweep is clipped: {percent:.1} % of the region's samples are at white or black clipping"
-    )]
-    Clipped {
-        /// Percentage of clipped samples.
-        percent: f64,
-    },
-    /// No sweep oscillation was found.
-    #[error("no oscillation found: {0}")]
-    NoOscillation(String),
-    /// The chart's modulation is neither given nor estimable.
-    #[error("chart modulation unknown: {0}")]
-    ModulationUnknown(String),
-    /// A curve was measured but fails the quality gate (too few samples per
-    /// bin, a poorly fitting phase law, or modulation lost in noise).
-    #[error("curve refused: {0}")]
-    Unreliable(String),
-    /// A failure in a photo whose decoder reported damaged data (the likely cause).
-    #[error("{failure} (the photo itself is damaged: {damage})")]
-    Damaged {
-        /// The failure itself.
-        failure: Box<Failure>,
-        /// What the decoder or the scan check found damaged.
-        damage: String,
-    },
-}
-
-/// A failed measurement: the file and the cause, displayed as one line.
-#[derive(Debug, Error)]
-#[error("{}", if matches!(self.failure, Failure::Decode(_) | Failure::Raw(_)) { self.failure.to_string() } else { format!("{}: {}", self.path, self.failure) })]
-pub struct MeasureError {
-    /// The photo.
-    pub path: String,
-    /// The cause.
-    pub failure: Failure,
-}
-
-/// One measured MTF curve (one channel, one sweep).
-#[derive(Debug, Clone, Serialize)]
-pub struct Curve {
-    /// Channel name (`luma`, `grey`, `r`, …).
-    pub channel: String,
-    /// Sweep name (from the target; `strip` without one).
-    pub sweep_id: String,
-    /// The fitted phase law (strip units).
-    pub law: PhaseLaw,
-    /// Strip units: "mm" with a target, "px" (along the strip's edge) without.
-    pub strip_unit: &'static str,
-    /// Points in increasing frequency.
-    pub points: Vec<MtfPoint>,
-    /// Chart modulation used for normalisation.
-    pub chart_modulation: f64,
-    /// One-sigma uncertainty of `chart_modulation` (0 when printed on the target).
-    pub chart_modulation_err: f64,
-    /// Where the chart modulation came from.
-    pub chart_modulation_source: String,
-    /// Summary figures.
-    pub figures: Figures,
-    /// Lowest aliased frequency (cycles/pixel), if any point is aliased.
-    pub aliasing_from_cy_px: Option<f64>,
-    /// Fraction of the region's samples at clipping.
-    pub clipped_fraction: f64,
-    /// Image corners of the binned region.
-    pub region_px: [Point; 4],
-    /// Image segment across the strip where aliasing starts.
-    pub alias_line_px: Option<[Point; 2]>,
-    /// Image segment across the strip at the lowest and highest measured points.
-    pub measured_lines_px: [[Point; 2]; 2],
-}
-
-/// A small RGB picture of the measured area, for the region plot.
-#[derive(Debug, Clone, Default)]
-pub struct Preview {
-    /// Image x of the preview's left edge (pixels).
-    pub x0: f64,
-    /// Image y of the preview's top edge (pixels).
-    pub y0: f64,
-    /// Image pixels per preview pixel.
-    pub scale: f64,
-    /// Preview width.
-    pub width: usize,
-    /// Preview height.
-    pub height: usize,
-    /// RGB8 data, row-major.
-    pub rgb: Vec<u8>,
-}
-
-/// The result of measuring one photo.
-#[derive(Debug, Clone)]
-pub struct Measurement {
-    /// The photo (as given).
-    pub source: String,
-    /// Image width (pixels).
-    pub image_width: usize,
-    /// Image height (pixels).
-    pub image_height: usize,
-    /// Bits per sample of the file.
-    pub bits: u32,
-    /// Method used.
-    pub method: Method,
-    /// Description of the tone linearisation.
-    pub tone: String,
-    /// Raw Bayer greens: the gain the second green lattice was multiplied by
-    /// to bring it to the first's level (Gb to Gr on RGGB), when balanced.
-    pub green_gain: Option<f64>,
-    /// Pixel pitch (mm), when known.
-    pub pixel_pitch_mm: Option<f64>,
-    /// The region corners used (image pixels).
-    pub roi: [Point; 4],
-    /// Sweep curves.
-    pub curves: Vec<Curve>,
-    /// Sine-patch results.
-    pub patches: Vec<PatchResult>,
-    /// Warnings: something may be wrong with the result (one line each).
-    pub warnings: Vec<String>,
-    /// Notes: what was done or assumed (one line each; the CLI shows them with `-v`).
-    pub notes: Vec<String>,
-    /// The lens distortion given or estimated (None: not looked for, e.g. with a target).
-    pub distortion: Option<DistortionFound>,
-    /// Picture of the measured area.
-    pub preview: Preview,
-    /// Colour moiré (R−B spread) of each sweep measured in red and blue (`--channel all`; [`moire`]).
-    pub colour_moire: Vec<moire::ColourMoire>,
-}
-
-/// Messages gathered around a measurement before its result exists: warnings
-/// (something may be wrong with the result) and notes (what was done or assumed).
-#[derive(Clone, Debug, Default)]
-pub(crate) struct Said {
-    /// Warnings, one line each.
-    pub warnings: Vec<String>,
-    /// Notes, one line each.
-    pub notes: Vec<String>,
-}
-
-impl Said {
-    /// Puts these messages before the measurement's own.
-    pub(crate) fn put_before(self, m: &mut Measurement) {
-        let Said {
-            mut warnings,
-            mut notes,
-        } = self;
-        warnings.append(&mut m.warnings);
-        notes.append(&mut m.notes);
-        m.warnings = warnings;
-        m.notes = notes;
-    }
-
-    /// The failure `e` of a photo these messages say is damaged, with the
-    /// damage named as its likely cause; `e` itself otherwise.
-    pub(crate) fn blame(&self, e: MeasureError) -> MeasureError {
-        match self.warnings.iter().find(|w| w.contains(DAMAGE_MARK)) {
-            Some(w) => MeasureError {
-                path: e.path,
-                failure: Failure::Damaged {
-                    failure: Box::new(e.failure),
-                    damage: w.clone(),
-                },
-            },
-            None => e,
-        }
-    }
-
-    /// Adds these messages after the measurement's own.
-    pub(crate) fn add_to(self, m: &mut Measurement) {
-        m.warnings.extend(self.warnings);
-        m.notes.extend(self.notes);
-    }
-}
-
-/// The words every damaged-data warning carries (see [`Said::blame`]).
-pub(crate) const DAMAGE_MARK: &str = "scan data";
-
 /// Decodes a photo and measures it.
 pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, MeasureError> {
     let name = path.display().to_string();
@@ -566,34 +283,6 @@ pub fn measure_decoded(
         }
     };
     measure_decoded_at(dec, name, target, opts, &roi, seen, said)
-}
-
-/// Checks the advanced options' ranges (bin width, margin, window, gamma, pixel pitch).
-fn check_options(o: &MeasureOptions) -> Result<(), Failure> {
-    let bad = |m: String| Err(Failure::Options(m));
-    if !(o.bin_px > 0.0 && o.bin_px <= 2.0) {
-        return bad(format!("bin width {} px must be in (0, 2]", o.bin_px));
-    }
-    if !(0.0..=0.45).contains(&o.margin) {
-        return bad(format!("margin {} must be in [0, 0.45]", o.margin));
-    }
-    if !(o.window_cycles >= 1.0 && o.window_cycles <= 64.0) {
-        return bad(format!(
-            "window {} cycles must be in [1, 64]",
-            o.window_cycles
-        ));
-    }
-    if let Some(g) = o.gamma
-        && !(g > 0.0 && g <= 10.0)
-    {
-        return bad(format!("gamma {g} must be in (0, 10]"));
-    }
-    if let Some(p) = o.pixel_pitch_mm
-        && !(p > 0.0 && p.is_finite())
-    {
-        return bad("pixel pitch must be positive".into());
-    }
-    Ok(())
 }
 
 /// Measures linear planes of an image of `size` (w, h) pixels: one group per
