@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
+pub mod chart_mtf;
 pub mod curve;
 pub mod estimate;
 pub mod figures;
