@@ -29,7 +29,7 @@ fn print_mtf(f_cy_mm: f64) -> f64 {
 }
 
 /// A 34×10 mm chart: one log sweep 0.3–12 cy/mm over 30 mm.
-fn target() -> Target {
+pub(crate) fn target() -> Target {
     Target {
         name: "print-test".into(),
         width_mm: 34.0,
@@ -64,19 +64,24 @@ fn print() -> Option<PrintMtf> {
 
 /// The scan: 60 px per chart mm (0.005–0.2 cy/px), no optics, 16-bit linear, noiseless.
 fn scanner() -> Camera {
+    scanner_of(print())
+}
+
+/// The scan of a print with `print_blur`.
+fn scanner_of(print_blur: Option<PrintMtf>) -> Camera {
     Camera {
         width_px: 2140,
         height_px: 680,
         chart_px: Some(34.0 * 60.0),
         encoding: Encoding::Linear,
         bits: 16,
-        print_blur: print(),
+        print_blur,
         ..Camera::default()
     }
 }
 
 /// The camera: 20 px per chart mm (0.015–0.6 cy/px), sRGB 8-bit.
-fn camera() -> Camera {
+pub(crate) fn camera() -> Camera {
     Camera {
         width_px: 760,
         height_px: 260,
@@ -96,7 +101,7 @@ fn noisy(c: Camera) -> Camera {
     }
 }
 
-fn optics(sigma_px: f64) -> System {
+pub(crate) fn optics(sigma_px: f64) -> System {
     let mut factors: Vec<Box<dyn sweepmtf::model::Factor>> = Vec::new();
     if sigma_px > 0.0 {
         factors.push(Box::new(GaussianPsf {
@@ -106,7 +111,7 @@ fn optics(sigma_px: f64) -> System {
     System { factors }
 }
 
-fn shoot(cam: &Camera, sys: &System, format: PhotoFormat) -> (Shot, Vec<u8>) {
+pub(crate) fn shoot(cam: &Camera, sys: &System, format: PhotoFormat) -> (Shot, Vec<u8>) {
     let shot = render(&target(), sys, cam).unwrap();
     let bytes = shot.encode(format).unwrap();
     (shot, bytes)
@@ -117,7 +122,7 @@ fn corners(shot: &Shot) -> [[f64; 2]; 4] {
     [[c[0], c[1]], [c[2], c[3]], [c[4], c[5]], [c[6], c[7]]]
 }
 
-fn measure(shot: &Shot, bytes: &[u8]) -> Measurement {
+pub(crate) fn measure(shot: &Shot, bytes: &[u8]) -> Measurement {
     let dec = decode_bytes(bytes, "print").unwrap();
     let opts = MeasureOptions {
         roi: Some(corners(shot)),
@@ -156,7 +161,12 @@ fn score(shot: &Shot, m: &Measurement, chart: &ChartMtf) -> (f64, usize, usize, 
 
 /// The scan's measured print MTF as a chart table (through the CSV that `measure --lens-mtf` writes).
 fn scan_table(dir: &Path) -> ChartMtf {
-    let (shot, bytes) = shoot(&scanner(), &optics(0.0), PhotoFormat::Png);
+    scan_table_of(dir, print().unwrap())
+}
+
+/// [`scan_table`] of a print `p`, checked against its closed form within 0.02.
+pub(crate) fn scan_table_of(dir: &Path, p: PrintMtf) -> ChartMtf {
+    let (shot, bytes) = shoot(&scanner_of(Some(p)), &optics(0.0), PhotoFormat::Png);
     let m = measure(&shot, &bytes);
     let lcs: Vec<_> = m
         .curves
@@ -178,7 +188,7 @@ fn scan_table(dir: &Path) -> ChartMtf {
         assert_eq!(tab.column, "lens_mtf");
         let (mut worst, mut at) = (0.0f64, 0.0);
         for (f, v) in tab.f_cy_mm.iter().zip(&tab.mtf) {
-            let d = (v - print_mtf(*f)).abs();
+            let d = (v - p.mtf(*f)).abs();
             if d > worst {
                 (worst, at) = (d, *f);
             }
@@ -226,6 +236,44 @@ fn scan_and_closed_form_compensation_give_the_camera_within_0_01_rms() {
                 "{name}/{src}: the print's loss must show: {raw}"
             );
         }
+    }
+}
+
+/// A print of square 150 dpi dots (sinc(f·25.4/150): 0.3 at 4.5 cy/mm, zero
+/// at 5.9 cy/mm, then reversed contrast): through the scan and through
+/// `dots:dpi=150`, the camera within 0.01 RMS where the print's MTF ≥ 0.3,
+/// and the points past its zero (where a scan's MTF rises again) flagged.
+#[test]
+fn dot_print_compensation() {
+    let dir = tempfile::tempdir().unwrap();
+    let dots = PrintMtf::Dots { dpi: 150.0 };
+    let scan = scan_table_of(dir.path(), dots);
+    let cam = Camera {
+        print_blur: Some(dots),
+        ..camera()
+    };
+    let (shot, bytes) = shoot(&cam, &optics(0.6), PhotoFormat::Png);
+    let m = measure(&shot, &bytes);
+    let c = &m.curves[0];
+    let truth = &shot.truth().unwrap().rows;
+    for (src, chart) in [("scan", &scan), ("dots", &ChartMtf::Model(dots))] {
+        let cc = chart_curve(c, chart).unwrap();
+        let (mut se, mut n) = (0.0, 0);
+        for (i, p) in c.points.iter().enumerate() {
+            let pm = dots.mtf(p.freq_chart);
+            let beyond_zero = p.freq_chart > 150.0 / 25.4;
+            if (pm < 0.29 || beyond_zero) && !p.aliased {
+                assert_ne!(cc.flag[i], ChartFlag::Ok, "{src}: {} cy/mm", p.freq_chart);
+            }
+            if cc.flag[i] == ChartFlag::Ok && pm >= 0.3 {
+                let t = crate::csv_support::rows_truth_at(truth, p.freq_cy_px);
+                se += (cc.camera_mtf[i] - t).powi(2);
+                n += 1;
+            }
+        }
+        let rms = (se / n.max(1) as f64).sqrt();
+        eprintln!("dots 150 dpi / {src}: camera RMS {rms:.4} over {n} points");
+        assert!(n >= 30 && rms <= 0.01, "{src}: {rms} over {n}");
     }
 }
 
