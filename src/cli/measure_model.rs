@@ -10,7 +10,7 @@ use serde_json::Value;
 use std::path::Path;
 use sweepmtf::measure::Measurement;
 use sweepmtf::measure::PatchResult;
-use sweepmtf::measure::chart_mtf::{ChartCurve, ChartMtf, ChartMtfError, chart_curve};
+use sweepmtf::measure::chart_mtf::{ChartCurve, ChartMtf, ChartMtfError, chart_curve_scaled};
 use sweepmtf::measure::lens_mtf::{LensCurve, SensorPart, is_sensor_factor, lens_curve};
 use sweepmtf::measure::model_overlay::{
     CurveModel, MIN_MODEL_FOR_RATIO, ModelOverlay, ModelSource, OverlayError, PatchComparison,
@@ -48,13 +48,19 @@ pub struct ModelArgs {
     /// 0.3 are flagged, not given.
     #[arg(long, value_name = "FILE|gaussian:sigma=LENGTH|dots:dpi=N")]
     pub chart_mtf: Option<String>,
+    /// With --chart-mtf and no --target: the printed length of the sweep strip
+    /// between the --roi's short edges (corners 1–4 and 2–3), e.g. 200mm.
+    #[arg(long, value_name = "LENGTH", requires = "chart_mtf")]
+    pub chart_length: Option<String>,
 }
 
 /// A chart MTF that cannot be used: a bad model string or no scale exits 2, a bad file 3.
 fn chart_err(e: ChartMtfError) -> CliError {
     match e {
         ChartMtfError::File { .. } => CliError::new(Code::Input, e.to_string()),
-        ChartMtfError::Spec { .. } | ChartMtfError::NoScale => CliError::usage(e.to_string()),
+        ChartMtfError::Spec { .. } | ChartMtfError::NoScale | ChartMtfError::BadLength => {
+            CliError::usage(e.to_string())
+        }
     }
 }
 
@@ -74,6 +80,8 @@ pub struct Prepared {
     lens_mtf: bool,
     /// `--chart-mtf`: the print's MTF (file read and checked before measuring).
     chart: Option<ChartMtf>,
+    /// `--chart-length`: the printed length (mm) of a target-less strip.
+    chart_length_mm: Option<f64>,
 }
 
 /// Reads the EXIF facts and the model file; checks `auto` has an f-number. Runs before measuring.
@@ -132,12 +140,24 @@ pub fn prepare_with(a: &ModelArgs, facts: ExifFacts, name: &str) -> Result<Prepa
         .map(ChartMtf::from_arg)
         .transpose()
         .map_err(chart_err)?;
+    let chart_length_mm = match &a.chart_length {
+        None => None,
+        Some(t) => {
+            let l = sweepmtf::units::parse_length_mm(t)
+                .map_err(|e| CliError::usage(format!("--chart-length: {e}")))?;
+            if !(l > 0.0 && l.is_finite()) {
+                return Err(chart_err(ChartMtfError::BadLength));
+            }
+            Some(l)
+        }
+    };
     Ok(Prepared {
         facts,
         source,
         wavelength_mm,
         lens_mtf: a.lens_mtf,
         chart,
+        chart_length_mm,
     })
 }
 
@@ -189,7 +209,7 @@ impl Prepared {
                 let ccs = m
                     .curves
                     .iter()
-                    .map(|c| chart_curve(c, ch))
+                    .map(|c| chart_curve_scaled(c, ch, self.chart_length_mm))
                     .collect::<Result<Vec<_>, _>>()
                     .map_err(chart_err)?;
                 Some((ch.clone(), ccs))

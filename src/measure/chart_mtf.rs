@@ -14,8 +14,10 @@
 //!
 //! The chart frequency of a point is known when the strip was measured in
 //! chart millimetres (with a target description: its located geometry maps
-//! image pixels to chart mm); otherwise the compensation is refused
-//! ([`ChartMtfError::NoScale`]).
+//! image pixels to chart mm), or, without a target, when the printed length
+//! of the strip between the region's short edges is given (the strip's
+//! homography makes its units proportional to chart mm); otherwise the
+//! compensation is refused ([`ChartMtfError::NoScale`]).
 
 use super::Curve;
 use crate::print_mtf::PrintMtf;
@@ -46,9 +48,13 @@ pub enum ChartMtfError {
     /// The points' chart frequencies (cycles/mm of print) are unknown.
     #[error(
         "--chart-mtf: the chart frequency in cycles/mm of print is unknown without a target \
-         description; give --target CHART.toml (the chart's description, which `chart` writes)"
+         description; give --target CHART.toml (the chart's description, which `chart` writes) \
+         or --chart-length (the printed length of the strip between the --roi's short edges)"
     )]
     NoScale,
+    /// The printed strip length is not a positive length.
+    #[error("--chart-length must be a positive length (e.g. 200mm)")]
+    BadLength,
 }
 
 /// The print's MTF, tabulated from a measurement of the print itself.
@@ -272,9 +278,35 @@ impl ChartCurve {
 ///
 /// σ(camera) = √((σ_M/C)² + (M·σ_C/C²)²) for MTF M ± σ_M and print MTF C ± σ_C.
 pub fn chart_curve(c: &Curve, chart: &ChartMtf) -> Result<ChartCurve, ChartMtfError> {
-    if c.strip_unit != "mm" {
+    chart_curve_scaled(c, chart, None)
+}
+
+/// Chart millimetres per strip unit of a curve: 1 when it was measured in
+/// chart mm (with a target); without one, the printed length of the strip
+/// between the region's short edges (`strip_mm`, mm) over its length in px.
+pub fn mm_per_strip_unit(c: &Curve, strip_mm: Option<f64>) -> Result<f64, ChartMtfError> {
+    if c.strip_unit == "mm" {
+        return Ok(1.0);
+    }
+    let l = strip_mm.ok_or(ChartMtfError::NoScale)?;
+    if !(l.is_finite() && l > 0.0) {
+        return Err(ChartMtfError::BadLength);
+    }
+    if !(c.strip_length.is_finite() && c.strip_length > 0.0) {
         return Err(ChartMtfError::NoScale);
     }
+    Ok(l / c.strip_length)
+}
+
+/// [`chart_curve`] for a curve measured with or without a target: `strip_mm`
+/// is the printed length (mm) of a target-less strip between the region's
+/// short edges (ignored with a target).
+pub fn chart_curve_scaled(
+    c: &Curve,
+    chart: &ChartMtf,
+    strip_mm: Option<f64>,
+) -> Result<ChartCurve, ChartMtfError> {
+    let mm_per_unit = mm_per_strip_unit(c, strip_mm)?;
     let n = c.points.len();
     let mut out = ChartCurve {
         chart_mtf: Vec::with_capacity(n),
@@ -283,7 +315,8 @@ pub fn chart_curve(c: &Curve, chart: &ChartMtf) -> Result<ChartCurve, ChartMtfEr
         flag: Vec::with_capacity(n),
     };
     for p in &c.points {
-        let at = chart.at(p.freq_chart);
+        // Cycles per strip unit → cycles per mm of print.
+        let at = chart.at(p.freq_chart / mm_per_unit);
         let (d, de) = at.unwrap_or((f64::NAN, f64::NAN));
         let flag = if p.aliased {
             ChartFlag::Aliased
@@ -376,6 +409,7 @@ mod tests {
                 c2: 0.0,
             },
             strip_unit: unit,
+            strip_length: 100.0,
             points: points
                 .iter()
                 .map(|&(f, m, e, aliased)| MtfPoint {
@@ -439,9 +473,19 @@ mod tests {
         assert!((cc.camera_mtf[0] - 0.52 / d).abs() < 1e-12);
         assert!((cc.camera_mtf_err[0] - 0.01 / d).abs() < 1e-12);
         assert_eq!(cc.flag[2], ChartFlag::BelowFloor, "{}", cc.chart_mtf[2]);
-        assert_eq!(
-            chart_curve(&curve(&[(1.0, 0.5, 0.0, false)], "px"), &g).unwrap_err(),
-            ChartMtfError::NoScale
-        );
+        let px = curve(&[(1.0, 0.5, 0.0, false)], "px");
+        assert_eq!(chart_curve(&px, &g).unwrap_err(), ChartMtfError::NoScale);
+        // 100 px of strip printed over 50 mm: 1 cy/px of strip = 2 cy/mm.
+        let cc = chart_curve_scaled(&px, &g, Some(50.0)).unwrap();
+        assert!((cc.chart_mtf[0] - g.at(2.0).unwrap().0).abs() < 1e-15);
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                chart_curve_scaled(&px, &g, Some(bad)).unwrap_err(),
+                ChartMtfError::BadLength
+            );
+        }
+        // With a target the length is not needed (and not used).
+        let cc = chart_curve_scaled(&c, &g, Some(1.0)).unwrap();
+        assert!((cc.camera_mtf[0] - 0.52 / d).abs() < 1e-12);
     }
 }

@@ -12,7 +12,7 @@
 use assert_cmd::Command;
 use std::f64::consts::PI;
 use std::path::Path;
-use sweepmtf::measure::chart_mtf::{ChartFlag, ChartMtf, chart_curve};
+use sweepmtf::measure::chart_mtf::{ChartFlag, ChartMtf, chart_curve, chart_curve_scaled};
 use sweepmtf::measure::{MeasureOptions, Measurement, measure_decoded};
 use sweepmtf::model::System;
 use sweepmtf::photo::decode::decode_bytes;
@@ -239,6 +239,53 @@ fn scan_and_closed_form_compensation_give_the_camera_within_0_01_rms() {
     }
 }
 
+/// Without a target: the sweep strip's corners alone (as `simulate` gives
+/// them in `roi`) and its printed length (30 mm) give the chart frequency;
+/// through the closed form and the scan, the camera within 0.01 RMS.
+#[test]
+fn without_a_target_the_printed_strip_length_gives_the_scale() {
+    let dir = tempfile::tempdir().unwrap();
+    let scan = scan_table(dir.path());
+    let (shot, bytes) = shoot(&camera(), &optics(0.6), PhotoFormat::Png);
+    let r = shot.roi().unwrap();
+    let dec = decode_bytes(&bytes, "strip").unwrap();
+    let opts = MeasureOptions {
+        roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
+        sweep: sweepmtf::measure::SweepChoice::Log,
+        ..MeasureOptions::default()
+    };
+    let m = measure_decoded(&dec, "strip", None, &opts).unwrap();
+    let c = &m.curves[0];
+    assert_eq!(c.strip_unit, "px");
+    assert!(
+        chart_curve(c, &scan).is_err(),
+        "no scale without the length"
+    );
+    let truth = &shot.truth().unwrap().rows;
+    for (src, chart) in [
+        ("scan", &scan),
+        ("gaussian", &ChartMtf::Model(print().unwrap())),
+    ] {
+        let cc = chart_curve_scaled(c, chart, Some(30.0)).unwrap();
+        let (mut se, mut n) = (0.0, 0);
+        for (i, p) in c.points.iter().enumerate() {
+            // The chart frequency from the shot's scale (20 px per chart mm, straight).
+            let fc = p.freq_cy_px * 20.0;
+            if cc.flag[i] == ChartFlag::Ok {
+                assert!(print_mtf(fc) > 0.29, "{src}: {fc} cy/mm given");
+                if print_mtf(fc) >= 0.3 {
+                    let t = crate::csv_support::rows_truth_at(truth, p.freq_cy_px);
+                    se += (cc.camera_mtf[i] - t).powi(2);
+                    n += 1;
+                }
+            }
+        }
+        let rms = (se / n.max(1) as f64).sqrt();
+        eprintln!("no target / {src}: camera RMS {rms:.4} over {n} points");
+        assert!(n >= 30 && rms <= 0.01, "{src}: {rms} over {n}");
+    }
+}
+
 /// A print of square 150 dpi dots (sinc(f·25.4/150): 0.3 at 4.5 cy/mm, zero
 /// at 5.9 cy/mm, then reversed contrast): through the scan and through
 /// `dots:dpi=150`, the camera within 0.01 RMS where the print's MTF ≥ 0.3,
@@ -421,12 +468,58 @@ fn cli_scan_then_camera() {
         )
         .unwrap();
     }
+    // Without a target: the strip's corners and its printed length (30 mm).
+    let strip_roi = cam
+        .roi()
+        .unwrap()
+        .iter()
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
+    let out = d.join("strip_out");
+    Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .arg("measure")
+        .arg(d.join("cam.png"))
+        .args(["--roi", &strip_roi, "--no-refine-roi", "--sweep", "log"])
+        .args([
+            "--chart-mtf",
+            "gaussian:sigma=0.05mm",
+            "--chart-length",
+            "30mm",
+        ])
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success();
+    let rows = crate::csv_support::read_csv(&out.join("cam.mtf.csv"));
+    let (mut n, mut se) = (0, 0.0);
+    for r in rows.iter().filter(|r| r["chart_flag"] == "ok") {
+        let f: f64 = r["freq_cy_px"].parse().unwrap();
+        let v: f64 = r["camera_mtf"].parse().unwrap();
+        se += (v - crate::csv_support::rows_truth_at(truth, f)).powi(2);
+        n += 1;
+    }
+    let rms = (se / n as f64).sqrt();
+    eprintln!("CLI without target, --chart-length 30mm: {n} given, RMS {rms:.4}");
+    assert!(n > 30 && rms <= 0.01);
     // Refusals: one line on stderr, the documented code, nothing written.
-    let cases: [(&[&str], i32, &str, bool); 3] = [
+    let cases: [(&[&str], i32, &str, bool); 4] = [
         (
             &["--chart-mtf", "gaussian:sigma=0.05mm"],
             2,
             "--target",
+            false,
+        ),
+        (
+            &[
+                "--chart-mtf",
+                "gaussian:sigma=0.05mm",
+                "--chart-length",
+                "0mm",
+            ],
+            2,
+            "--chart-length",
             false,
         ),
         (
