@@ -31,14 +31,17 @@ pub struct LevelReach {
     pub cy_px: Option<f64>,
     /// With `None`: the highest chart frequency known (a file's last row; infinite for a model).
     pub known_to_cy_mm: f64,
+    /// The same as an image frequency (cycles/pixel).
+    pub known_to_cy_px: f64,
 }
 
 impl LevelReach {
-    /// Whether the print stays at or above the level up to Nyquist (0.5 cy/px).
+    /// Whether the print stays at or above the level up to Nyquist (0.5 cy/px),
+    /// as far as is known (a file that never falls below it must reach Nyquist).
     pub fn covers_nyquist(&self) -> bool {
         match self.cy_px {
             Some(f) => f >= 0.5,
-            None => false,
+            None => self.known_to_cy_px >= 0.5,
         }
     }
 }
@@ -55,6 +58,7 @@ pub fn check(chart: &ChartMtf, px_per_chart_mm: f64) -> Vec<LevelReach> {
                 chart_cy_mm: f,
                 cy_px: f.map(|f| f / px_per_chart_mm),
                 known_to_cy_mm: known,
+                known_to_cy_px: known / px_per_chart_mm,
             }
         })
         .collect()
@@ -123,6 +127,8 @@ mod tests {
         assert!((r[2].chart_cy_mm.unwrap() - 2.75).abs() < 1e-12);
         assert_eq!(r[3].chart_cy_mm, None);
         assert_eq!(r[3].known_to_cy_mm, 3.0);
+        assert!(!r[3].covers_nyquist(), "known to 0.3 cy/px only");
+        assert!(check(&ChartMtf::Table(t.clone()), 5.0)[3].covers_nyquist());
         let low = ChartTable {
             mtf: vec![0.95, 0.9, 0.9],
             ..t

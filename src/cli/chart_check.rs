@@ -118,7 +118,7 @@ fn reach_text(r: &LevelReach, px_per_mm: f64) -> String {
         }
         (Some(_), _) => "never falls below (a perfect print)".into(),
         _ => format!(
-            "not below within the file: at least to {:.3} cy/px ({:.2} cy/mm, its last row)",
+            "at least {:.3} cy/px ({:.2} cy/mm on the print: the file's last row)",
             r.known_to_cy_mm / px_per_mm,
             r.known_to_cy_mm
         ),

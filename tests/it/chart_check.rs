@@ -203,3 +203,41 @@ fn cli_text_json_and_refusals() {
         );
     }
 }
+
+/// `chart --dot-model` writes the nominal dot model beside the chart; read by
+/// `chart-check` (and `--chart-mtf`) it gives what `dots:dpi=N` gives.
+#[test]
+fn chart_writes_the_dot_model_as_a_starting_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("c.png");
+    Command::cargo_bin("sweepmtf")
+        .unwrap()
+        .args(["chart", "--f-min", "0.2", "--f-max", "5", "--size", "A5"])
+        .args(["--dpi", "300", "--dot-model", "-o"])
+        .arg(&png)
+        .assert()
+        .success();
+    let csv = dir.path().join("c.print_mtf.csv");
+    let json = |print: &str| -> serde_json::Value {
+        let a = check_cmd(&[
+            "--print",
+            print,
+            "--chart-px",
+            "1000",
+            "--chart-width",
+            "210mm",
+            "--json",
+        ])
+        .success();
+        serde_json::from_slice(&a.get_output().stdout).unwrap()
+    };
+    let (file, model) = (json(csv.to_str().unwrap()), json("dots:dpi=300"));
+    for k in 0..2 {
+        let a = file["levels"][k]["chart_cy_mm"].as_f64().unwrap();
+        let b = model["levels"][k]["chart_cy_mm"].as_f64().unwrap();
+        assert!((a - b).abs() < 0.01, "level {k}: {a} vs {b}");
+    }
+    // Beyond the file's 1.2 × f_max the file does not say: null with known_to_cy_mm.
+    assert!(file["levels"][3]["chart_cy_mm"].is_null());
+    assert!((file["levels"][3]["known_to_cy_mm"].as_f64().unwrap() - 6.0).abs() < 1e-9);
+}
