@@ -310,7 +310,7 @@ impl Extras {
                 .enumerate()
                 .map(|(i, l)| match camera_figures(m, i, l).mtf50_cy_px {
                     Some(f) => format!(" | camera MTF50 {f:.3} cy/px (print divided out)"),
-                    None => " | camera MTF50 not reached where the print allows".to_string(),
+                    None => " | camera MTF50 not reached (print divided out)".to_string(),
                 })
                 .collect::<String>(),
             None => String::new(),
