@@ -76,7 +76,7 @@ impl ChartTable {
     /// Reads a `.mtf.csv` that `measure` wrote: the chart frequency from
     /// `freq_chart_cy_mm` (written with a target), else `freq_cy_mm` (cycles
     /// per mm of print when the pitch given was the scanner's sample spacing
-    /// on the print, e.g. 25.4mm/2400 for a 2400 dpi scan); the MTF from
+    /// on the print, e.g. 10.583um for a 2400 dpi scan); the MTF from
     /// `lens_mtf` where `lens_flag` is `ok` when the file has those columns
     /// (the scanner's pixel aperture divided out), else `mtf`; `mtf_err` (or
     /// `lens_mtf_err`) as its uncertainty; aliased rows left out; with several
