@@ -39,6 +39,9 @@ pub struct Args {
     /// Print the result as JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Also draw the print's MTF against image frequency with the levels (PNG).
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
 }
 
 fn usage(m: impl Into<String>) -> CliError {
@@ -156,6 +159,12 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     let px_per_mm = px_per_chart_mm(a)?;
     let chart = ChartMtf::from_arg(&a.print).map_err(chart_err)?;
     let levels = check(&chart, px_per_mm);
+    if let Some(p) = &a.plot {
+        let png = sweepmtf::report::chart_check_plot::chart_check_png(&chart, px_per_mm, &levels)
+            .map_err(|e| CliError::new(Code::Internal, e.to_string()))?;
+        sweepmtf::report::atomic::write_atomic(p, &png)
+            .map_err(|e| CliError::new(Code::Output, e.to_string()))?;
+    }
     if a.json {
         let lv: Vec<_> = levels
             .iter()

@@ -1,6 +1,7 @@
 //! Writing results: CSV, JSON summaries and plots, atomically.
 
 pub mod atomic;
+pub mod chart_check_plot;
 pub mod chart_mtf;
 pub mod csv;
 pub mod json;

@@ -126,6 +126,21 @@ fn cli_text_json_and_refusals() {
     );
     assert_eq!(v["compensation_floor"], 0.3);
     assert!(v["verdict"].as_str().unwrap().contains("Nyquist"));
+    // The picture.
+    let png = dir.path().join("check.png");
+    check_cmd(&[
+        "--print",
+        "dots:dpi=600",
+        "--chart-px",
+        "500",
+        "--chart-width",
+        "100mm",
+        "--plot",
+        png.to_str().unwrap(),
+    ])
+    .success();
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (900, 540));
     // A perfect print: sharp enough everywhere.
     let a = check_cmd(&[
         "--print",
