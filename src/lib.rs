@@ -17,6 +17,7 @@ pub mod measure;
 pub mod model;
 pub mod photo;
 pub mod plot;
+pub mod print_mtf;
 pub mod report;
 pub mod simulate;
 pub mod target;

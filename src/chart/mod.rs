@@ -17,6 +17,7 @@ pub mod layout;
 pub mod preview;
 pub mod raster;
 pub mod setup;
+pub mod suitability;
 pub mod write_pdf;
 pub mod write_png;
 pub mod write_tiff;

@@ -72,6 +72,11 @@ pub struct Args {
     /// Chart name written into the title and the description (default: file stem).
     #[arg(long)]
     pub name: Option<String>,
+    /// Also write NAME.print_mtf.csv: the printer's nominal dot model (a square dot of
+    /// 1/dpi inch, |sinc(f·25.4/dpi)|) up to 1.2 × --f-max, a starting file for
+    /// `measure --chart-mtf` until the print is measured.
+    #[arg(long)]
+    pub dot_model: bool,
     /// Output file: NAME.png, NAME.tif or NAME.pdf (NAME.toml and NAME.preview.png go beside it).
     #[arg(short = 'o', long)]
     pub output: PathBuf,
@@ -247,7 +252,21 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for w in &chart.warnings {
         super::messages::warning(w);
     }
-    write_all(&chart, &encoding, format, &args.output)?;
+    let dot_model = args.dot_model.then(|| {
+        let stem = args
+            .output
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default();
+        let model = sweepmtf::print_mtf::PrintMtf::Dots {
+            dpi: args.dpi as f64,
+        };
+        (
+            args.output.with_file_name(format!("{stem}.print_mtf.csv")),
+            sweepmtf::print_mtf::table_csv(&model, 1.2 * f_max, 400).into_bytes(),
+        )
+    });
+    write_all(&chart, &encoding, format, &args.output, dot_model)?;
     let mut line = format!(
         "wrote {} ({}×{} px, {}×{} mm at {} dpi): {} {}–{} cy/mm, {:.1} dots/cycle at the top",
         args.output.display(),
@@ -281,9 +300,13 @@ fn write_all(
     encoding: &Encoding,
     format: Format,
     output: &Path,
+    extra: Option<(PathBuf, Vec<u8>)>,
 ) -> Result<(), CliError> {
     let (toml_path, preview_path) = side_paths(output);
-    let targets = [output.to_path_buf(), toml_path, preview_path];
+    let mut targets = vec![output.to_path_buf(), toml_path, preview_path];
+    if let Some((p, _)) = &extra {
+        targets.push(p.clone());
+    }
     let temps: Vec<PathBuf> = targets.iter().map(|p| temp_path(p)).collect();
     let cleanup = |temps: &[PathBuf]| {
         for t in temps {
@@ -310,6 +333,9 @@ fn write_all(
             .preview
             .write_png(BufWriter::new(f))
             .map_err(|e| out_err(&targets[2], e.to_string()))?;
+        if let Some((p, bytes)) = &extra {
+            std::fs::write(&temps[3], bytes).map_err(|e| out_err(p, e.to_string()))?;
+        }
         for (t, p) in temps.iter().zip(&targets) {
             std::fs::rename(t, p).map_err(|e| out_err(p, e.to_string()))?;
         }

@@ -161,6 +161,11 @@ fn located_failure(a: &Args, opts: &MeasureOptions, e: MeasureError) -> CliError
 pub fn run(a: &Args) -> Result<(), CliError> {
     let t_start = Instant::now();
     let opts = a.flags.options()?;
+    if a.model.chart_mtf.is_some() && opts.target.is_none() && a.model.chart_length.is_none() {
+        return Err(CliError::usage(
+            sweepmtf::measure::chart_mtf::ChartMtfError::NoScale.to_string(),
+        ));
+    }
     let prepared = super::measure_model::prepare(&a.model, &a.photo)?;
     let t1 = Instant::now();
     // Every chart found (one set of outputs each), or the one region asked for.

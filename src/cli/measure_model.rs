@@ -10,12 +10,16 @@ use serde_json::Value;
 use std::path::Path;
 use sweepmtf::measure::Measurement;
 use sweepmtf::measure::PatchResult;
+use sweepmtf::measure::chart_mtf::{ChartCurve, ChartMtf, ChartMtfError, chart_curve_scaled};
 use sweepmtf::measure::lens_mtf::{LensCurve, SensorPart, is_sensor_factor, lens_curve};
 use sweepmtf::measure::model_overlay::{
     CurveModel, MIN_MODEL_FOR_RATIO, ModelOverlay, ModelSource, OverlayError, PatchComparison,
     compare_patches, evaluate, evaluate_patches,
 };
 use sweepmtf::photo::exif::ExifFacts;
+use sweepmtf::report::chart_mtf::{
+    add_chart_columns, add_chart_json, camera_figures, chart_plot_curves, print_plot_curve,
+};
 use sweepmtf::report::lens_mtf::{add_lens_columns, add_lens_json, lens_figures, lens_plot_curves};
 use sweepmtf::report::model_overlay::{
     PlotExtras, add_exif, add_model, add_mtf_model_column, add_patch_comparison,
@@ -37,6 +41,27 @@ pub struct ModelArgs {
     /// pixel); points where that divisor is below 0.2 are flagged, not given.
     #[arg(long)]
     pub lens_mtf: bool,
+    /// Also give the camera MTF: the MTF divided by the print's own MTF at each
+    /// point's chart frequency (needs --target). FILE: the `.mtf.csv` measured from a
+    /// scan or close, sharp capture of the same print; or a model,
+    /// gaussian:sigma=LENGTH or dots:dpi=N. Points where the print's MTF is below
+    /// 0.3 are flagged, not given.
+    #[arg(long, value_name = "FILE|gaussian:sigma=LENGTH|dots:dpi=N")]
+    pub chart_mtf: Option<String>,
+    /// With --chart-mtf and no --target: the printed length of the sweep strip
+    /// between the --roi's short edges (corners 1–4 and 2–3), e.g. 200mm.
+    #[arg(long, value_name = "LENGTH", requires = "chart_mtf")]
+    pub chart_length: Option<String>,
+}
+
+/// A chart MTF that cannot be used: a bad model string or no scale exits 2, a bad file 3.
+fn chart_err(e: ChartMtfError) -> CliError {
+    match e {
+        ChartMtfError::File { .. } => CliError::new(Code::Input, e.to_string()),
+        ChartMtfError::Spec { .. } | ChartMtfError::NoScale | ChartMtfError::BadLength => {
+            CliError::usage(e.to_string())
+        }
+    }
 }
 
 fn overlay_err(e: OverlayError) -> CliError {
@@ -53,6 +78,10 @@ pub struct Prepared {
     source: Option<ModelSource>,
     wavelength_mm: f64,
     lens_mtf: bool,
+    /// `--chart-mtf`: the print's MTF (file read and checked before measuring).
+    chart: Option<ChartMtf>,
+    /// `--chart-length`: the printed length (mm) of a target-less strip.
+    chart_length_mm: Option<f64>,
 }
 
 /// Reads the EXIF facts and the model file; checks `auto` has an f-number. Runs before measuring.
@@ -105,11 +134,30 @@ pub fn prepare_with(a: &ModelArgs, facts: ExifFacts, name: &str) -> Result<Prepa
             return Err(CliError::usage(e.to_string()));
         }
     }
+    let chart = a
+        .chart_mtf
+        .as_deref()
+        .map(ChartMtf::from_arg)
+        .transpose()
+        .map_err(chart_err)?;
+    let chart_length_mm = match &a.chart_length {
+        None => None,
+        Some(t) => {
+            let l = sweepmtf::units::parse_length_mm(t)
+                .map_err(|e| CliError::usage(format!("--chart-length: {e}")))?;
+            if !(l > 0.0 && l.is_finite()) {
+                return Err(chart_err(ChartMtfError::BadLength));
+            }
+            Some(l)
+        }
+    };
     Ok(Prepared {
         facts,
         source,
         wavelength_mm,
         lens_mtf: a.lens_mtf,
+        chart,
+        chart_length_mm,
     })
 }
 
@@ -126,6 +174,8 @@ pub struct Extras {
     pub plot: PlotExtras,
     /// `--lens-mtf`: the divisor and the lens MTF of each curve.
     lens: Option<(SensorPart, Vec<LensCurve>)>,
+    /// `--chart-mtf`: the print's MTF and the camera MTF of each curve.
+    chart: Option<(ChartMtf, Vec<ChartCurve>)>,
 }
 
 impl Prepared {
@@ -154,6 +204,18 @@ impl Prepared {
         } else {
             None
         };
+        let chart = match &self.chart {
+            Some(ch) => {
+                let ccs = m
+                    .curves
+                    .iter()
+                    .map(|c| chart_curve_scaled(c, ch, self.chart_length_mm))
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(chart_err)?;
+                Some((ch.clone(), ccs))
+            }
+            None => None,
+        };
         let has_facts = !self.facts.describe().is_empty();
         let mut plot = plot_extras(
             model.as_ref().map(|(o, c)| (o, c.as_slice())),
@@ -168,6 +230,10 @@ impl Prepared {
         if let Some((_, lcs)) = &lens {
             plot.lens_curves = lens_plot_curves(m, lcs);
         }
+        if let Some((_, ccs)) = &chart {
+            plot.chart_curves = chart_plot_curves(m, ccs);
+            plot.print_curve = print_plot_curve(m, ccs);
+        }
         Ok(Extras {
             facts: self.facts.clone(),
             model,
@@ -175,6 +241,7 @@ impl Prepared {
             patch_cmp,
             plot,
             lens,
+            chart,
         })
     }
 }
@@ -186,8 +253,12 @@ impl Extras {
             Some((_, cms)) => add_mtf_model_column(&bytes, cms),
             None => bytes,
         };
-        match &self.lens {
+        let bytes = match &self.lens {
             Some((_, lcs)) => add_lens_columns(&bytes, lcs),
+            None => bytes,
+        };
+        match &self.chart {
+            Some((_, ccs)) => add_chart_columns(&bytes, ccs),
             None => bytes,
         }
     }
@@ -206,6 +277,9 @@ impl Extras {
         add_exif(&mut v, &self.facts);
         if let Some((s, lcs)) = &self.lens {
             add_lens_json(&mut v, m, s, lcs);
+        }
+        if let Some((ch, ccs)) = &self.chart {
+            add_chart_json(&mut v, m, ch, ccs);
         }
         if let Some((o, cms)) = &self.model {
             add_model(&mut v, o, cms);
@@ -230,7 +304,18 @@ impl Extras {
                 .collect::<String>(),
             None => String::new(),
         };
-        format!("{}{lens}", self.model_suffix())
+        let chart = match &self.chart {
+            Some((_, ccs)) => ccs
+                .iter()
+                .enumerate()
+                .map(|(i, l)| match camera_figures(m, i, l).mtf50_cy_px {
+                    Some(f) => format!(" | camera MTF50 {f:.3} cy/px (print divided out)"),
+                    None => " | camera MTF50 not reached (print divided out)".to_string(),
+                })
+                .collect::<String>(),
+            None => String::new(),
+        };
+        format!("{}{lens}{chart}", self.model_suffix())
     }
 
     /// The model's part of [`Extras::line_suffix`].

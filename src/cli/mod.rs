@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 
 mod batch;
 mod chart;
+mod chart_check;
 mod exit;
 pub(crate) mod factors;
 mod gui;
@@ -38,6 +39,8 @@ enum Command {
     Measure(measure::Args),
     /// Generate a printable sweep or sine-patch chart and its description.
     Chart(chart::Args),
+    /// Say up to which image frequency a print is sharp enough for a camera set-up.
+    ChartCheck(chart_check::Args),
     /// Measure every photo in one or more folders.
     Batch(batch::Args),
     /// Join the summaries of several batch output folders.
@@ -71,6 +74,7 @@ pub fn main() -> std::process::ExitCode {
     let result = match &cli.command {
         Command::Measure(a) => measure::run(a),
         Command::Chart(a) => chart::run(a),
+        Command::ChartCheck(a) => chart_check::run(a),
         Command::Batch(a) => batch::run(a),
         Command::Merge(a) => batch::run_merge(a),
         Command::Model(a) => model::run(a),

@@ -126,6 +126,11 @@ pub struct Args {
     /// Chroma sampling of a colour JPEG: 420 (as most cameras), 422 or 444 (needs --light-colour).
     #[arg(long, value_name = "420|422|444")]
     pub chroma: Option<String>,
+    /// The print's own blur: the chart's sines lose modulation by it at their chart
+    /// frequency, gaussian:sigma=LENGTH (exp(−2π²σ²f²)) or dots:dpi=N (sinc(f·25.4/N));
+    /// the truth stays the camera's MTF (the print's is `print_mtf` in STEM.json).
+    #[arg(long, value_name = "gaussian:sigma=LENGTH|dots:dpi=N")]
+    pub print_blur: Option<String>,
     /// Pixel aperture: auto (square unless the system has an aperture factor), square or none.
     #[arg(long, value_name = "KIND", default_value = "auto")]
     pub pixel_aperture: String,
@@ -259,6 +264,14 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
         .as_deref()
         .map(|v| v.parse::<simulate::LightGradient>().map_err(usage))
         .transpose()?;
+    let print_blur = a
+        .print_blur
+        .as_deref()
+        .map(|v| {
+            v.parse::<sweepmtf::print_mtf::PrintMtf>()
+                .map_err(|e| usage(format!("--print-blur {e}")))
+        })
+        .transpose()?;
     let light_colour = a
         .light_colour
         .as_deref()
@@ -302,6 +315,7 @@ fn camera(a: &Args, pixel_pitch_um: f64) -> Result<Camera, CliError> {
         light_gradient,
         light_colour,
         chroma,
+        print_blur,
         render: RenderSettings {
             oversample: a.oversample,
             margin_px: a.margin,

@@ -334,6 +334,8 @@ pub fn save(s: &Server, v: Value) -> Reply {
         model: None,
         wavelength: None,
         lens_mtf: false,
+        chart_mtf: None,
+        chart_length: None,
     };
     let written = prepare_with(&none, j.photo.facts.clone(), &j.photo.name).and_then(|prepared| {
         std::fs::create_dir_all(&out).map_err(|e| {

@@ -18,6 +18,7 @@ use crate::photo::linearise::{Channel, Crop, file_tone, planes};
 use crate::target::Target;
 use std::path::Path;
 
+pub mod chart_mtf;
 pub mod curve;
 pub mod estimate;
 pub mod figures;

@@ -82,6 +82,9 @@ pub struct Curve {
     pub law: PhaseLaw,
     /// Strip units: "mm" with a target, "px" (along the strip's edge) without.
     pub strip_unit: &'static str,
+    /// Length of the strip in strip units (chart mm with a target; without one,
+    /// px: the mean of the region's two long edges, corners 1→2 and 4→3).
+    pub strip_length: f64,
     /// Points in increasing frequency.
     pub points: Vec<MtfPoint>,
     /// Chart modulation used for normalisation.

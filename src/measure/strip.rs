@@ -233,6 +233,7 @@ pub(super) fn measure_strip(
         sweep_id: id.to_string(),
         law,
         strip_unit: if target_law.is_some() { "mm" } else { "px" },
+        strip_length: strip.length,
         points,
         chart_modulation: m_chart,
         chart_modulation_err: m_chart_err,

@@ -1,6 +1,8 @@
 //! Writing results: CSV, JSON summaries and plots, atomically.
 
 pub mod atomic;
+pub mod chart_check_plot;
+pub mod chart_mtf;
 pub mod csv;
 pub mod json;
 pub mod lens_mtf;

@@ -44,6 +44,10 @@ pub struct PlotExtras {
     pub caption: String,
     /// Lens MTF curves (`--lens-mtf`), drawn solid in dark orange.
     pub lens_curves: Vec<ModelCurve>,
+    /// Camera MTF curves (`--chart-mtf`: the print divided out), drawn solid in teal.
+    pub chart_curves: Vec<ModelCurve>,
+    /// The print's MTF against image frequency (`--chart-mtf`), drawn dashed in purple.
+    pub print_curve: Option<ModelCurve>,
 }
 
 /// Plot extras: one dashed model curve per distinct sweep direction (0–1 cy/px),
@@ -107,6 +111,8 @@ pub fn plot_extras(
         patch_marks,
         caption: caption.join("  ·  "),
         lens_curves: Vec::new(),
+        chart_curves: Vec::new(),
+        print_curve: None,
     }
 }
 
@@ -329,12 +335,61 @@ pub fn draw_lens_curves<'a, DB: DrawingBackend + 'a>(
     xmax: f64,
     ymax: f64,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    for (k, lc) in extras.lens_curves.iter().enumerate() {
-        let col = if k == 0 {
-            RGBColor(200, 90, 0)
-        } else {
-            RGBColor(235, 160, 90)
-        };
+    draw_solid(
+        chart,
+        &extras.lens_curves,
+        [RGBColor(200, 90, 0), RGBColor(235, 160, 90)],
+        xmax,
+        ymax,
+    )
+}
+
+/// Draws the camera MTF curves (`--chart-mtf`) solid, teal then lighter, and the print's MTF dashed purple.
+pub fn draw_chart_curves<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    extras: &PlotExtras,
+    xmax: f64,
+    ymax: f64,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    if let Some(pc) = &extras.print_curve {
+        let style = RGBColor(150, 60, 160).stroke_width(2);
+        chart
+            .draw_series(DashedLineSeries::new(
+                pc.points
+                    .iter()
+                    .filter(|p| p.0 <= xmax)
+                    .map(|&(f, v)| (f, v.clamp(0.0, ymax))),
+                4,
+                4,
+                style,
+            ))?
+            .label(pc.label.clone())
+            .legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new([(0, 0), (4, 0)], style)
+                    + PathElement::new([(8, 0), (12, 0)], style)
+                    + PathElement::new([(16, 0), (18, 0)], style)
+            });
+    }
+    draw_solid(
+        chart,
+        &extras.chart_curves,
+        [RGBColor(0, 130, 140), RGBColor(110, 190, 200)],
+        xmax,
+        ymax,
+    )
+}
+
+/// Draws curves solid in the first colour, later ones in the second, clamped to 0..`ymax`.
+fn draw_solid<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    curves: &[ModelCurve],
+    colours: [RGBColor; 2],
+    xmax: f64,
+    ymax: f64,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    for (k, lc) in curves.iter().enumerate() {
+        let col = colours[k.min(1)];
         let pts: Vec<(f64, f64)> = lc
             .points
             .iter()

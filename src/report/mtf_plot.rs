@@ -142,6 +142,7 @@ where
             extras
                 .lens_curves
                 .iter()
+                .chain(&extras.chart_curves)
                 .flat_map(|c| c.points.iter().map(|p| p.1)),
         )
         .fold(1.05, f64::max);
@@ -280,6 +281,7 @@ where
     }
     super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     super::model_overlay::draw_lens_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
+    super::model_overlay::draw_chart_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     if !m.patches.is_empty() {
         let col = RGBColor(230, 120, 20);
         // Patches beyond the axis (aliased, far above Nyquist) are left off rather than pinned to its edge.

@@ -276,6 +276,10 @@ pub struct Camera {
     pub light_colour: Option<[f64; 3]>,
     /// Chroma sampling of a colour JPEG.
     pub chroma: Chroma,
+    /// The print's own MTF: the chart's sines lose modulation by it at their
+    /// chart frequency (cycles/mm of print); the truth stays the camera's MTF.
+    /// `None` = a perfect print.
+    pub print_blur: Option<crate::print_mtf::PrintMtf>,
     /// Whether and how the pixel area is integrated.
     pub pixel_aperture: PixelAperture,
     /// Renderer accuracy settings.
@@ -314,6 +318,7 @@ impl Default for Camera {
             light_gradient: None,
             light_colour: None,
             chroma: Chroma::default(),
+            print_blur: None,
             pixel_aperture: PixelAperture::Auto,
             render: RenderSettings::default(),
         }

@@ -219,6 +219,7 @@ pub fn render(target: &Target, system: &System, camera: &Camera) -> Result<Shot,
         lens.as_ref(),
         &optics,
         camera.sharpen.as_ref(),
+        camera.print_blur.as_ref(),
     );
     let mut warnings = Vec::new();
     let band = camera.render.oversample as f64 / 2.0;

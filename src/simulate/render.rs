@@ -213,6 +213,8 @@ struct Scene<'a> {
     surround: f64,
     /// Sub-samples per fine-cell side where a cell straddles a region boundary.
     edge_subsamples: usize,
+    /// The print's own MTF applied to the chart's sines (`None`: a perfect print).
+    print: Option<crate::print_mtf::PrintMtf>,
 }
 
 impl Scene<'_> {
@@ -238,14 +240,16 @@ impl Scene<'_> {
         cx >= 0.0 && cy >= 0.0 && cx < self.target.width_mm && cy < self.target.height_mm
     }
 
-    /// Reflectance at image point (x, y): the target inside its frame, the surround outside.
+    /// Reflectance at image point (x, y): the target (as printed) inside its frame, the surround outside.
     #[inline]
     fn at(&self, x: f64, y: f64) -> f64 {
         let (cx, cy) = self.chart(x, y);
-        if self.inside(cx, cy) {
-            self.target.reflectance(cx, cy)
-        } else {
+        if !self.inside(cx, cy) {
             self.surround
+        } else if let Some(p) = &self.print {
+            self.target.reflectance_printed(cx, cy, |f| p.transfer(f))
+        } else {
+            self.target.reflectance(cx, cy)
         }
     }
 
@@ -393,6 +397,7 @@ pub fn render_reflectance(
         lens: camera.lens(),
         surround: camera.surround,
         edge_subsamples: camera.render.edge_subsamples,
+        print: camera.print_blur,
     };
     let (w, h) = (camera.width_px, camera.height_px);
     let t = plan.tile;

@@ -15,6 +15,7 @@ use super::nuisance::Sharpen;
 use super::render::Optics;
 use crate::distortion::Lens;
 use crate::geometry::{Homography, Point};
+use crate::print_mtf::PrintMtf;
 use crate::target::{Direction, Rect, Target};
 use serde::Serialize;
 
@@ -35,6 +36,10 @@ pub struct TruthRow {
     pub x_px: f64,
     /// Image y of the point on the strip's centre line, pixels.
     pub y_px: f64,
+    /// The print's MTF at `chart_freq_cy_mm` (shots with a print blur only;
+    /// the image's modulation is `mtf` × this × the chart contrast).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub print_mtf: Option<f64>,
 }
 
 /// The truth of one sweep strip.
@@ -65,7 +70,7 @@ pub struct PatchTruth {
     pub mtf: f64,
     /// The printed modulation.
     pub chart_contrast: f64,
-    /// The modulation the (noiseless, unclipped) image shows: mtf × chart contrast.
+    /// The modulation the (noiseless, unclipped) image shows: mtf × chart contrast (× the print's MTF).
     pub modulation: f64,
 }
 
@@ -135,6 +140,7 @@ pub fn truths(
     lens: Option<&Lens>,
     optics: &Optics,
     sharpen: Option<&Sharpen>,
+    print: Option<&PrintMtf>,
 ) -> (Vec<SweepTruth>, Vec<PatchTruth>) {
     let gain = |k: [f64; 2]| sharpen.map_or(1.0, |s| s.gain(k[0], k[1]));
     let pitch = optics.pitch_mm;
@@ -166,6 +172,7 @@ pub fn truths(
                         chart_freq_cy_mm: f,
                         x_px: q[0],
                         y_px: q[1],
+                        print_mtf: print.map(|p| p.mtf(f)),
                     }
                 })
                 .collect();
@@ -196,14 +203,15 @@ pub fn truths(
                 freq_cy_px: k[0].hypot(k[1]),
                 mtf,
                 chart_contrast: p.contrast,
-                modulation: mtf * p.contrast,
+                modulation: mtf * p.contrast * print.map_or(1.0, |q| q.mtf(p.freq_cy_mm)),
             }
         })
         .collect();
     (sweeps, patches)
 }
 
-/// A sweep's truth curve as CSV text: `freq_cy_px,mtf,s_mm,freq_cy_mm,chart_freq_cy_mm,x_px,y_px`.
+/// A sweep's truth curve as CSV text: `freq_cy_px,mtf,s_mm,freq_cy_mm,chart_freq_cy_mm,x_px,y_px`
+/// (+ `print_mtf` for a shot with a print blur).
 pub fn truth_csv(t: &SweepTruth) -> Result<Vec<u8>, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in &t.rows {

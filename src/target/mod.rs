@@ -381,6 +381,28 @@ impl Target {
         Ok(())
     }
 
+    /// Linear reflectance at a chart point (mm) of a print whose sines have
+    /// lost modulation by `print(f)` at their chart frequency f (cycles/mm):
+    /// a sweep's local term is scaled by `print(freq_at(s))` (exact for a
+    /// blur much shorter than the distance over which the frequency changes),
+    /// a patch's by `print(freq_cy_mm)`; edges stay sharp. `print = |_| 1`
+    /// gives [`Target::reflectance`].
+    pub fn reflectance_printed(&self, x: f64, y: f64, print: impl Fn(f64) -> f64) -> f64 {
+        if let Some(v) = self.fiducials.iter().find_map(|f| f.reflectance_at(x, y)) {
+            return v;
+        }
+        if let Some(sw) = self.sweeps.iter().find(|s| s.rect.contains(x, y)) {
+            let s = sw.s_of(x, y);
+            let c = sw.contrast * print(sw.freq_at(s));
+            return sw.mean * (1.0 + c * (2.0 * PI * sw.phase_cycles(s)).cos());
+        }
+        if let Some(p) = self.patches.iter().find(|p| p.rect.contains(x, y)) {
+            let m = print(p.freq_cy_mm);
+            return p.mean + m * (p.reflectance_at(x, y) - p.mean);
+        }
+        self.reflectance(x, y)
+    }
+
     /// Linear reflectance (0 = black, 1 = paper white) at a chart point (mm).
     ///
     /// Later regions paint over earlier ones in this order: background, grey

@@ -14,6 +14,8 @@ mod batch_measure;
 mod batch_resume;
 mod batch_run;
 mod batch_shard;
+mod chart_check;
+mod chart_mtf;
 mod chart_output;
 mod chart_sinemtf;
 mod colour_moire;
