@@ -203,6 +203,7 @@ mod tests {
                 c2: 0.0,
             },
             strip_unit: "px",
+            strip_length: 1.0,
             points: pts
                 .iter()
                 .map(|&(f, m)| MtfPoint {
