@@ -213,6 +213,8 @@ pub struct Outputs {
     pub summary: serde_json::Value,
     /// Appended to the summary line (the model comparison, when a model is drawn).
     pub line_suffix: String,
+    /// Warnings the extras add (e.g. a print that is not sharp enough), printed after the measurement's own.
+    pub warnings: Vec<String>,
 }
 
 /// Builds one measurement's outputs as `out/STEM.*` (nothing is written);
@@ -257,6 +259,7 @@ pub fn outputs(
         csv_path,
         summary: summary_value,
         line_suffix: extras.line_suffix(m),
+        warnings: extras.warnings(m),
     })
 }
 
@@ -272,7 +275,7 @@ fn write_outputs(
     let name = a.photo.display().to_string();
     let o = outputs(m, &a.out, stem, a.flags.plot, prepared, timings)?;
     write_all_atomic(&o.files).map_err(|e| CliError::new(Code::Output, e.to_string()))?;
-    for w in &m.warnings {
+    for w in m.warnings.iter().chain(&o.warnings) {
         super::messages::warning(&format!("{name}: {w}"));
     }
     for n in &m.notes {

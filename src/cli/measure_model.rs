@@ -272,6 +272,29 @@ impl Extras {
         }
     }
 
+    /// Warnings the extras add: with `--chart-mtf`, each curve whose measured
+    /// frequencies pass the point where the print stops being sharp enough
+    /// (print MTF < 0.99: its plain MTF there is lowered by the print by more
+    /// than 1 %).
+    pub fn warnings(&self, m: &Measurement) -> Vec<String> {
+        let Some((_, ccs)) = &self.chart else {
+            return Vec::new();
+        };
+        m.curves
+            .iter()
+            .zip(ccs)
+            .filter_map(|(c, l)| {
+                let (f, n) = l.soft_from(c)?;
+                Some(format!(
+                    "{}/{}: the print's MTF is below {} from {f:.3} cy/px on ({n} points): the MTF there includes the print's loss; camera_mtf is the camera's own",
+                    c.channel,
+                    c.sweep_id,
+                    sweepmtf::chart::suitability::SHARP_ENOUGH
+                ))
+            })
+            .collect()
+    }
+
     /// The JSON summary with `exif` and, with a model, `model` and the MTF50 ratios.
     pub fn json(&self, mut v: Value, m: &Measurement) -> Value {
         add_exif(&mut v, &self.facts);
@@ -280,6 +303,9 @@ impl Extras {
         }
         if let Some((ch, ccs)) = &self.chart {
             add_chart_json(&mut v, m, ch, ccs);
+        }
+        if let Some(Value::Array(w)) = v.get_mut("warnings") {
+            w.extend(self.warnings(m).into_iter().map(Value::String));
         }
         if let Some((o, cms)) = &self.model {
             add_model(&mut v, o, cms);

@@ -267,6 +267,23 @@ impl ChartCurve {
             .map(|(p, (v, _))| (p.freq_cy_px, *v))
     }
 
+    /// Where the print stops being sharp enough for the plain MTF: the first
+    /// non-aliased point (cy/px) whose print MTF is below
+    /// [`crate::chart::suitability::SHARP_ENOUGH`] (or unknown), and how many
+    /// such points there are; None when the print is sharp enough along the
+    /// whole measured curve.
+    pub fn soft_from(&self, c: &Curve) -> Option<(f64, usize)> {
+        let sharp = crate::chart::suitability::SHARP_ENOUGH;
+        let soft: Vec<f64> = c
+            .points
+            .iter()
+            .zip(&self.chart_mtf)
+            .filter(|(p, d)| !p.aliased && !(**d >= sharp))
+            .map(|(p, _)| p.freq_cy_px)
+            .collect();
+        soft.first().map(|&f| (f, soft.len()))
+    }
+
     /// Number of points with flag `f`.
     pub fn count(&self, f: ChartFlag) -> usize {
         self.flag.iter().filter(|&&g| g == f).count()

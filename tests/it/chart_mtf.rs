@@ -403,6 +403,43 @@ fn cli_scan_then_camera() {
     let line = String::from_utf8_lossy(&a.get_output().stdout).into_owned();
     assert!(line.contains("camera MTF50"), "{line}");
     let rows = crate::csv_support::read_csv(&d.join("cam_out/cam.mtf.csv"));
+    // The warning: where the print stops being sharp enough (its MTF < 0.99),
+    // within one point of where the closed-form print falls below 0.99.
+    let err = String::from_utf8_lossy(&a.get_output().stderr).into_owned();
+    let said: f64 = err
+        .split("the print's MTF is below 0.99 from ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .unwrap_or_else(|| panic!("no sharpness warning: {err}"))
+        .parse()
+        .unwrap();
+    let fs: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r["aliased"] == "false")
+        .map(|r| {
+            (
+                r["freq_cy_px"].parse().unwrap(),
+                r["freq_chart_cy_mm"].parse().unwrap(),
+            )
+        })
+        .collect();
+    let k = fs.iter().position(|&(_, fc)| print_mtf(fc) < 0.99).unwrap();
+    let step = fs[k.max(1)].0 - fs[k.max(1) - 1].0;
+    assert!(
+        (said - fs[k].0).abs() <= 1.5 * step,
+        "warned from {said}, closed form {}",
+        fs[k].0
+    );
+    // A print sharp enough everywhere: no such warning.
+    let sharp = run(
+        "cam.png",
+        &roi_arg(&cam),
+        &["--chart-mtf", "gaussian:sigma=0.0001mm"],
+        "cam_sharp",
+    )
+    .success();
+    let err = String::from_utf8_lossy(&sharp.get_output().stderr).into_owned();
+    assert!(!err.contains("print's MTF is below"), "{err}");
     let truth = &cam.truth().unwrap().rows;
     let (mut ok, mut below, mut se) = (0, 0, 0.0);
     for r in &rows {
@@ -435,6 +472,15 @@ fn cli_scan_then_camera() {
         serde_json::from_slice(&std::fs::read(d.join("cam_out/cam.summary.json")).unwrap())
             .unwrap();
     assert_eq!(v["chart_mtf"]["floor"], 0.3);
+    assert!(
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("print's MTF is below 0.99")),
+        "{}",
+        v["warnings"]
+    );
     assert!(
         v["chart_mtf"]["source"]
             .as_str()
