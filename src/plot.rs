@@ -24,3 +24,22 @@ pub fn ensure_font() {
         );
     });
 }
+
+/// Encodes 8-bit RGB pixels (`w`×`h`, row-major) as PNG bytes at the fast
+/// compression level: every plot and picture of the crate goes through here
+/// (they are written on every run; a smaller file is not worth the time).
+pub fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, String> {
+    if rgb.len() as u64 != w as u64 * h as u64 * 3 {
+        return Err(format!("{} bytes for a {w}×{h} RGB picture", rgb.len()));
+    }
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, w, h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
+        let mut wr = enc.write_header().map_err(|e| e.to_string())?;
+        wr.write_image_data(rgb).map_err(|e| e.to_string())?;
+    }
+    Ok(out)
+}

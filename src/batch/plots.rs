@@ -47,18 +47,6 @@ fn colour(i: usize, n: usize) -> RGBColor {
     RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2))
 }
 
-fn encode_png(rgb: &[u8], (w, h): (u32, u32)) -> Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, w, h);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut w = enc.write_header().map_err(|e| e.to_string())?;
-        w.write_image_data(rgb).map_err(|e| e.to_string())?;
-    }
-    Ok(out)
-}
-
 /// Label of a shot in legends: `f/4 · stem` when the f-number is known.
 fn label(r: &ShotRecord) -> String {
     match r.result.f_number {
@@ -206,7 +194,7 @@ pub fn curves_png(curves: &[(&ShotRecord, Vec<(f64, f64)>)]) -> Result<Vec<u8>, 
         }
         root.present().map_err(|e| e.to_string())?;
     }
-    encode_png(&buf, SIZE)
+    crate::plot::encode_png(&buf, SIZE.0, SIZE.1)
 }
 
 /// Median of a non-empty slice.
@@ -325,7 +313,7 @@ pub fn mtf50_f_number_png(records: &[ShotRecord]) -> Result<Option<Vec<u8>>, Str
             .map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())?;
     }
-    encode_png(&buf, SIZE).map(Some)
+    crate::plot::encode_png(&buf, SIZE.0, SIZE.1).map(Some)
 }
 
 #[cfg(test)]

@@ -65,15 +65,7 @@ pub fn fmt_f64(x: f64) -> String {
     }
 }
 
-/// Encodes an RGB8 buffer of `w`×`h` pixels as PNG bytes.
-pub fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, String> {
-    use image::ImageEncoder;
-    let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut out)
-        .write_image(rgb, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| e.to_string())?;
-    Ok(out)
-}
+pub use crate::plot::encode_png;
 
 /// Unique column names `mtf_<name>` for the factors, numbering repeats (`mtf_gaussian_2`).
 pub fn factor_columns(names: &[String]) -> Vec<String> {

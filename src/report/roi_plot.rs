@@ -14,13 +14,9 @@ fn err(e: impl std::fmt::Display) -> ReportError {
     }
 }
 
-/// Encodes an RGB8 buffer as PNG.
+/// Encodes an RGB8 buffer as PNG ([`crate::plot::encode_png`]), errors as the region picture's.
 pub fn encode_png(buf: Vec<u8>, w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| err("buffer size"))?;
-    let mut out = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut out, image::ImageFormat::Png)
-        .map_err(err)?;
-    Ok(out.into_inner())
+    crate::plot::encode_png(&buf, w, h).map_err(err)
 }
 
 /// Renders the region picture (PNG bytes).
