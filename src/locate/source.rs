@@ -139,7 +139,7 @@ impl<F: Fn(usize, usize, &mut [f32]) + Sync> Source for Converted<F> {
             y1,
         };
         let w = c.x1 - c.x0;
-        let mut data = vec![0.0f32; w * (c.y1 - c.y0)];
+        let mut data = crate::photo::hugebuf::zeroed::<f32>(w * (c.y1 - c.y0));
         data.par_chunks_mut(w.max(1))
             .enumerate()
             .for_each(|(j, row)| (self.convert)(c.y0 + j, c.x0, row));

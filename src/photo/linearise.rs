@@ -242,7 +242,8 @@ pub fn planes_within(
     mixes(channel, nc)
         .iter()
         .map(|mix| {
-            let mut out = vec![0f32; w * h];
+            // Huge pages: a 24 MP region faults in as a few dozen pages, not thousands.
+            let mut out = super::hugebuf::zeroed::<f32>(w * h);
             out.par_chunks_mut(w).enumerate().for_each(|(dy, row)| {
                 let y = crop.y0 + dy;
                 let (a, b) = span(y);
