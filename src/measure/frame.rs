@@ -15,7 +15,7 @@ use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
 use crate::photo::jpeg::JpegWant;
-use crate::photo::linearise::{Channel, Crop, plane_names, planes, planes_within};
+use crate::photo::linearise::{Channel, Crop, plane_names, planes_within};
 use crate::target::Target;
 use std::path::Path;
 
@@ -245,7 +245,10 @@ pub(super) fn measure_decoded_at(
         let mut c = bbox_crop(&roi, dec.width, dec.height, pad);
         // A JPEG may be decoded only down to just below the region.
         c.y1 = c.y1.min(dec.rows).max(c.y0);
-        planes(dec, c, &tone, Channel::Luma).swap_remove(0)
+        // Only the bands about the long edges that the estimate searches (the
+        // strip's middle is never read): less to convert and to keep.
+        let band = |y: usize| super::lens_fit::edge_band_span(&roi, pad + 2.0, y);
+        planes_within(dec, c, &tone, Channel::Luma, &band).swap_remove(0)
     })
     .map_err(err)?;
     let lens = distortion.and_then(|d| d.lens(dec.width, dec.height));

@@ -170,6 +170,42 @@ pub fn search_pad_px(roi: &[Point; 4], width: usize, height: usize) -> f64 {
     20.0 + bow[0].max(bow[1])
 }
 
+/// The photo columns [x0, x1) of row `y` (pixel centre y + 0.5) that
+/// [`estimate`] may read: those within `pad` px of either long edge's chord
+/// (corners 1→2 and 4→3), where every edge search stays (the largest allowed
+/// bow plus the search depth is below [`search_pad_px`]); (0, 0) for rows
+/// that meet neither band. One interval per row: the hull of both bands.
+pub fn edge_band_span(roi: &[Point; 4], pad: f64, y: usize) -> (usize, usize) {
+    let yc = y as f64 + 0.5;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (p, q) in [(roi[0], roi[1]), (roi[3], roi[2])] {
+        let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+        // The part of the chord within `pad` of this row, as t ∈ [0, 1].
+        let (t0, t1) = if dy.abs() < 1e-12 {
+            if (p[1] - yc).abs() > pad {
+                continue;
+            }
+            (0.0, 1.0)
+        } else {
+            let (a, b) = ((yc - pad - p[1]) / dy, (yc + pad - p[1]) / dy);
+            (a.min(b).max(0.0), a.max(b).min(1.0))
+        };
+        if t0 > t1 {
+            continue;
+        }
+        let (xa, xb) = (p[0] + t0 * dx, p[0] + t1 * dx);
+        lo = lo.min(xa.min(xb) - pad);
+        hi = hi.max(xa.max(xb) + pad);
+    }
+    if lo > hi {
+        return (0, 0);
+    }
+    (
+        lo.floor().max(0.0) as usize,
+        hi.ceil().max(0.0) as usize + 1,
+    )
+}
+
 /// The largest |b| (a = c = 0) allowed in a `width`×`height` image ([`MAX_CORNER_PERCENT`] at the corner).
 fn b_max(width: usize, height: usize) -> f64 {
     let rc2 = (width as f64 / 2.0).hypot(height as f64 / 2.0).powi(2)
@@ -593,4 +629,51 @@ fn fit_edges(
         bow_px: bow,
         why_not,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every point within `pad` − 1 px of a long edge's chord lies in its row's
+    /// span (checked densely, for a turned and a steep strip); rows far from
+    /// both edges get none.
+    #[test]
+    fn edge_bands_hold_every_point_near_the_long_edges() {
+        let turned: [Point; 4] = [
+            [415.2, 1104.7],
+            [5614.4, 1195.5],
+            [5584.7, 2895.2],
+            [385.5, 2804.5],
+        ];
+        let steep: [Point; 4] = [
+            [800.0, 100.0],
+            [1300.0, 3900.0],
+            [1000.0, 3950.0],
+            [500.0, 150.0],
+        ];
+        let pad = 40.0;
+        for roi in [turned, steep] {
+            for (p, q) in [(roi[0], roi[1]), (roi[3], roi[2])] {
+                let len = (q[0] - p[0]).hypot(q[1] - p[1]);
+                let (ux, uy) = ((q[0] - p[0]) / len, (q[1] - p[1]) / len);
+                for k in 0..=400 {
+                    let t = k as f64 / 400.0;
+                    for d in [-(pad - 1.0), -10.0, 0.0, 10.0, pad - 1.0] {
+                        let x = p[0] + t * (q[0] - p[0]) - d * uy;
+                        let y = p[1] + t * (q[1] - p[1]) + d * ux;
+                        let row = (y - 0.5).round().max(0.0) as usize;
+                        let (a, b) = edge_band_span(&roi, pad, row);
+                        assert!(
+                            a as f64 <= x && x < b as f64,
+                            "({x:.1}, {y:.1}) outside row {row}'s span {a}..{b}"
+                        );
+                    }
+                }
+            }
+        }
+        // The turned strip's middle rows (edges at y ≈ 1105–1196 and 2804–2895) read nothing.
+        assert_eq!(edge_band_span(&turned, pad, 2000), (0, 0));
+        assert_ne!(edge_band_span(&turned, pad, 1150), (0, 0));
+    }
 }
