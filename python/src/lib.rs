@@ -160,6 +160,44 @@ impl NativeMeasurement {
             })
             .collect()
     }
+
+    /// The print's MTF divided out (`measure --chart-mtf`): one dict per curve.
+    #[pyo3(signature = (print, chart_length_mm=None))]
+    fn chart_mtf<'py>(
+        &self,
+        py: Python<'py>,
+        print: &str,
+        chart_length_mm: Option<f64>,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        use sweepmtf::measure::chart_mtf::{ChartMtf, ChartMtfError, chart_curve_scaled};
+        let err = |e: ChartMtfError| match e {
+            ChartMtfError::File { .. } => PyOSError::new_err(e.to_string()),
+            _ => value_err(e),
+        };
+        let chart = ChartMtf::from_arg(print).map_err(err)?;
+        let mut out = Vec::new();
+        for (i, c) in self.m.curves.iter().enumerate() {
+            let cc = chart_curve_scaled(c, &chart, chart_length_mm).map_err(err)?;
+            let g = sweepmtf::report::chart_mtf::camera_figures(&self.m, i, &cc);
+            let d = PyDict::new(py);
+            d.set_item("channel", &c.channel)?;
+            d.set_item("sweep_id", &c.sweep_id)?;
+            d.set_item("chart_mtf", PyArray1::from_vec(py, cc.chart_mtf.clone()))?;
+            d.set_item("camera_mtf", PyArray1::from_vec(py, cc.camera_mtf.clone()))?;
+            d.set_item(
+                "camera_mtf_err",
+                PyArray1::from_vec(py, cc.camera_mtf_err.clone()),
+            )?;
+            let flags: Vec<&str> = cc.flag.iter().map(|f| f.as_str()).collect();
+            d.set_item("chart_flag", flags)?;
+            d.set_item("camera_mtf50_cy_px", g.mtf50_cy_px)?;
+            d.set_item("camera_mtf50p_cy_px", g.mtf50p_cy_px)?;
+            d.set_item("camera_mtf10_cy_px", g.mtf10_cy_px)?;
+            d.set_item("print", chart.describe())?;
+            out.push(d);
+        }
+        Ok(out)
+    }
 }
 
 /// Code values of a numpy array (C-contiguous, H×W or H×W×3; uint8, uint16 or

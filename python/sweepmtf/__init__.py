@@ -159,6 +159,24 @@ class Measurement:
         """The CSV the CLI writes as STEM.mtf.csv."""
         return bytes(self._native.csv())
 
+    def chart_mtf(self, print_mtf: str, chart_length_mm: Optional[float] = None) -> List[Dict[str, Any]]:
+        """The print's own MTF divided out, as ``measure --chart-mtf``: one dict per curve.
+
+        print_mtf: a print MTF file (the ``.mtf.csv`` ``sweepmtf measure`` writes for
+          a scan or close capture of the print, or ``chart --dot-model``'s file)
+          or a model, ``gaussian:sigma=0.02mm`` or ``dots:dpi=600``.
+        chart_length_mm: without a target, the printed length (mm) of the strip
+          between the region's short edges (the image scale).
+        Each dict: ``chart_mtf`` (the print's MTF at each point's chart
+        frequency), ``camera_mtf`` and ``camera_mtf_err`` (NaN where flagged),
+        ``chart_flag`` ('ok', 'chart_below_floor' (print MTF < 0.3),
+        'outside_chart_file', 'aliased'), ``camera_mtf50_cy_px``,
+        ``camera_mtf50p_cy_px``, ``camera_mtf10_cy_px`` (None where not reached).
+        Raises ValueError (bad model, no scale) or OSError (unreadable file).
+        """
+        return list(self._native.chart_mtf(os.fspath(print_mtf),
+                                           None if chart_length_mm is None else float(chart_length_mm)))
+
     def to_csv(self, path: PathLike) -> None:
         """Writes the CSV the CLI writes as STEM.mtf.csv (atomically)."""
         _write(path, self.csv_bytes())

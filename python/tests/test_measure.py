@@ -172,3 +172,40 @@ def test_to_pandas():
     assert isinstance(df, pd.DataFrame)
     assert len(df) == sum(len(c.mtf) for c in m.curves)
     np.testing.assert_array_equal(df["mtf"].to_numpy()[: len(m.curves[0].mtf)], m.curves[0].mtf)
+
+
+def test_chart_mtf_gives_the_cli_columns(cli, tmp_path):
+    """Dividing out a print (Gaussian σ 0.02 mm): the CLI's `--chart-mtf` CSV columns and JSON figures."""
+    spec = "gaussian:sigma=0.02mm"
+    subprocess.run(
+        [cli, "measure", str(SHOT), "--target", str(TARGET), "--chart-mtf", spec, "-o", str(tmp_path)],
+        check=True,
+        capture_output=True,
+    )
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "a4_log_shot.mtf.csv").read_text())))
+    summary = json.loads((tmp_path / "a4_log_shot.summary.json").read_text())
+    m = sweepmtf.measure(SHOT, target=TARGET)
+    got = m.chart_mtf(spec)
+    assert len(got) == len(m.curves) == len(summary["curves"])
+    k = 0
+    for c, g, s in zip(m.curves, got, summary["curves"]):
+        n = len(c.mtf)
+        assert len(g["camera_mtf"]) == len(g["chart_flag"]) == n
+        for i in range(n):
+            r = rows[k + i]
+            assert g["chart_flag"][i] == r["chart_flag"]
+            assert abs(g["chart_mtf"][i] - float(r["chart_mtf"])) <= 6e-7  # the CSV keeps 6 decimals
+            if r["camera_mtf"] == "":
+                assert np.isnan(g["camera_mtf"][i])
+            else:
+                assert abs(g["camera_mtf"][i] - float(r["camera_mtf"])) <= 6e-7
+        k += n
+        for key in ("camera_mtf50_cy_px", "camera_mtf10_cy_px"):
+            assert close(g[key], s[key]), key
+        # The closed form itself: exp(−2π²σ²f²) at each point's chart frequency (cy/mm of print).
+        f = c.freq_chart
+        assert np.allclose(g["chart_mtf"], np.exp(-2 * np.pi**2 * 0.02**2 * f**2), rtol=0, atol=1e-12)
+    with pytest.raises(ValueError):
+        m.chart_mtf("gaussian:sigma=-1mm")
+    with pytest.raises(OSError):
+        m.chart_mtf(str(tmp_path / "no_such_print.mtf.csv"))
