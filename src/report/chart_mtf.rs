@@ -9,76 +9,43 @@
 //! `camera_*` fields beside them, so that one field keeps one meaning whatever
 //! flags a run was given.
 
+use super::divided::{append_columns, cell, divided_figures};
 use super::model_overlay::ModelCurve;
 use crate::measure::Measurement;
 use crate::measure::chart_mtf::{ChartCurve, ChartFlag, ChartMtf, MIN_CHART_MTF};
-use crate::measure::figures::{Figures, figures};
+use crate::measure::figures::Figures;
 use serde_json::{Value, json};
 
 /// Appends `chart_mtf,camera_mtf,camera_mtf_err,chart_flag` to a curves CSV
 /// (rows in curve, then point order); unchanged when the row count does not match.
 pub fn add_chart_columns(csv_bytes: &[u8], ccs: &[ChartCurve]) -> Vec<u8> {
-    let mut r = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .from_reader(csv_bytes);
-    let rows: Vec<csv::StringRecord> = match r.records().collect() {
-        Ok(v) => v,
-        Err(_) => return csv_bytes.to_vec(),
-    };
-    let n: usize = ccs.iter().map(|l| l.flag.len()).sum();
-    if rows.len() != n + 1 {
-        return csv_bytes.to_vec();
-    }
-    let num = |v: f64| {
-        if v.is_finite() {
-            format!("{v:.6}")
-        } else {
-            String::new()
-        }
-    };
+    let n = ccs.iter().map(|l| l.flag.len()).sum();
     let cells = ccs.iter().flat_map(|l| {
         (0..l.flag.len()).map(move |i| {
             [
-                num(l.chart_mtf[i]),
-                num(l.camera_mtf[i]),
-                num(l.camera_mtf_err[i]),
+                cell(l.chart_mtf[i]),
+                cell(l.camera_mtf[i]),
+                cell(l.camera_mtf_err[i]),
                 l.flag[i].as_str().to_string(),
             ]
         })
     });
-    let mut w = csv::Writer::from_writer(Vec::new());
-    let mut head: Vec<String> = rows[0].iter().map(str::to_string).collect();
-    head.extend(["chart_mtf", "camera_mtf", "camera_mtf_err", "chart_flag"].map(String::from));
-    let _ = w.write_record(&head);
-    for (row, extra) in rows[1..].iter().zip(cells) {
-        let mut c: Vec<String> = row.iter().map(str::to_string).collect();
-        c.extend(extra);
-        let _ = w.write_record(&c);
-    }
-    w.into_inner().unwrap_or_else(|_| csv_bytes.to_vec())
+    append_columns(
+        csv_bytes,
+        ["chart_mtf", "camera_mtf", "camera_mtf_err", "chart_flag"],
+        n,
+        cells,
+    )
 }
 
 /// The camera MTF's summary figures (MTF50 etc. of the given points; flagged points left out).
 pub fn camera_figures(m: &Measurement, i: usize, l: &ChartCurve) -> Figures {
-    let Some(c) = m.curves.get(i) else {
-        return Figures::default();
-    };
-    let pts: Vec<_> = c
-        .points
-        .iter()
-        .zip(
-            l.camera_mtf
-                .iter()
-                .zip(l.camera_mtf_err.iter().zip(&l.flag)),
-        )
-        .map(|(p, (&v, (&e, &f)))| crate::measure::MtfPoint {
-            mtf: v,
-            mtf_err: e,
-            aliased: f != ChartFlag::Ok,
-            ..*p
-        })
-        .collect();
-    figures(&pts)
+    match m.curves.get(i) {
+        Some(c) => divided_figures(c, &l.camera_mtf, &l.camera_mtf_err, |k| {
+            l.flag[k] == ChartFlag::Ok
+        }),
+        None => Figures::default(),
+    }
 }
 
 /// Adds `chart_mtf` (the source, the floor) and per curve `camera_mtf50_cy_px`,

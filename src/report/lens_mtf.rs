@@ -4,72 +4,43 @@
 //! or `aliased`), the `lens_mtf` object and per-curve lens MTF50 in the JSON
 //! summary, and the lens curve for the plot.
 
+use super::divided::{append_columns, cell, divided_figures};
 use super::model_overlay::ModelCurve;
 use crate::measure::Measurement;
-use crate::measure::figures::{Figures, figures};
+use crate::measure::figures::Figures;
 use crate::measure::lens_mtf::{LensCurve, LensFlag, MIN_DIVISOR, SensorPart};
 use serde_json::{Value, json};
 
 /// Appends `sensor_mtf,lens_mtf,lens_mtf_err,lens_flag` to a curves CSV (rows
 /// in curve, then point order); unchanged when the row count does not match.
 pub fn add_lens_columns(csv_bytes: &[u8], lcs: &[LensCurve]) -> Vec<u8> {
-    let mut r = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .from_reader(csv_bytes);
-    let rows: Vec<csv::StringRecord> = match r.records().collect() {
-        Ok(v) => v,
-        Err(_) => return csv_bytes.to_vec(),
-    };
-    let n: usize = lcs.iter().map(|l| l.flag.len()).sum();
-    if rows.len() != n + 1 {
-        return csv_bytes.to_vec();
-    }
+    let n = lcs.iter().map(|l| l.flag.len()).sum();
     let cells = lcs.iter().flat_map(|l| {
         (0..l.flag.len()).map(move |i| {
-            let num = |v: f64| {
-                if v.is_finite() {
-                    format!("{v:.6}")
-                } else {
-                    String::new()
-                }
-            };
             [
-                num(l.sensor_mtf[i]),
-                num(l.lens_mtf[i]),
-                num(l.lens_mtf_err[i]),
+                cell(l.sensor_mtf[i]),
+                cell(l.lens_mtf[i]),
+                cell(l.lens_mtf_err[i]),
                 l.flag[i].as_str().to_string(),
             ]
         })
     });
-    let mut w = csv::Writer::from_writer(Vec::new());
-    let mut head: Vec<String> = rows[0].iter().map(str::to_string).collect();
-    head.extend(["sensor_mtf", "lens_mtf", "lens_mtf_err", "lens_flag"].map(String::from));
-    let _ = w.write_record(&head);
-    for (row, extra) in rows[1..].iter().zip(cells) {
-        let mut c: Vec<String> = row.iter().map(str::to_string).collect();
-        c.extend(extra);
-        let _ = w.write_record(&c);
-    }
-    w.into_inner().unwrap_or_else(|_| csv_bytes.to_vec())
+    append_columns(
+        csv_bytes,
+        ["sensor_mtf", "lens_mtf", "lens_mtf_err", "lens_flag"],
+        n,
+        cells,
+    )
 }
 
 /// The lens MTF's summary figures (MTF50 etc. of the given points; flagged points left out).
 pub fn lens_figures(m: &Measurement, i: usize, l: &LensCurve) -> Figures {
-    let Some(c) = m.curves.get(i) else {
-        return Figures::default();
-    };
-    let pts: Vec<_> = c
-        .points
-        .iter()
-        .zip(l.lens_mtf.iter().zip(l.lens_mtf_err.iter().zip(&l.flag)))
-        .map(|(p, (&v, (&e, &f)))| crate::measure::MtfPoint {
-            mtf: v,
-            mtf_err: e,
-            aliased: f != LensFlag::Ok,
-            ..*p
-        })
-        .collect();
-    figures(&pts)
+    match m.curves.get(i) {
+        Some(c) => divided_figures(c, &l.lens_mtf, &l.lens_mtf_err, |k| {
+            l.flag[k] == LensFlag::Ok
+        }),
+        None => Figures::default(),
+    }
 }
 
 /// Adds `lens_mtf` (the divisor, its floor) and per curve `lens_mtf50`, `lens_mtf10`

@@ -4,6 +4,7 @@ pub mod atomic;
 pub mod chart_check_plot;
 pub mod chart_mtf;
 pub mod csv;
+mod divided;
 pub mod json;
 pub mod lens_mtf;
 pub mod model_cut;

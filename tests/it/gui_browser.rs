@@ -219,18 +219,28 @@ fn mtf50(d: &Driver) -> f64 {
         .expect("MTF50 shown")
 }
 
-#[test]
-fn browser_measures_drags_saves_and_models() {
+/// Chromium and chromedriver, or None (the test then reports itself
+/// skipped) — a failure instead when SWEEPMTF_REQUIRE_BROWSER=1.
+pub fn browser() -> Option<(PathBuf, PathBuf)> {
     let required = std::env::var("SWEEPMTF_REQUIRE_BROWSER").is_ok_and(|v| v == "1");
-    let (Some(chromium), Some(driver)) = (
+    let found = (
         find(&["chromium", "chromium-browser", "google-chrome"]),
         find(&["chromedriver"]),
-    ) else {
+    );
+    let (Some(chromium), Some(driver)) = found else {
         assert!(
             !required,
             "SWEEPMTF_REQUIRE_BROWSER=1 but chromium/chromedriver are not installed"
         );
         println!("skipped: no chromium and chromedriver on PATH");
+        return None;
+    };
+    Some((chromium, driver))
+}
+
+#[test]
+fn browser_measures_drags_saves_and_models() {
+    let Some((chromium, driver)) = browser() else {
         return;
     };
     let out = tempfile::tempdir().unwrap();

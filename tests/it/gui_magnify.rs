@@ -235,17 +235,8 @@ fn a_raw_uploaded_from_the_page_measures_as_the_file_does() {
 
 #[test]
 fn browser_lists_two_charts_and_measures_the_one_picked() {
-    use crate::gui_browser::{Driver, find};
-    let required = std::env::var("SWEEPMTF_REQUIRE_BROWSER").is_ok_and(|v| v == "1");
-    let (Some(chromium), Some(driver)) = (
-        find(&["chromium", "chromium-browser", "google-chrome"]),
-        find(&["chromedriver"]),
-    ) else {
-        assert!(
-            !required,
-            "SWEEPMTF_REQUIRE_BROWSER=1 but chromium/chromedriver are not installed"
-        );
-        println!("skipped: no chromium and chromedriver on PATH");
+    use crate::gui_browser::{Driver, browser};
+    let Some((chromium, driver)) = browser() else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
