@@ -84,30 +84,34 @@ impl Lattice {
 pub struct ChartModulation {
     /// Modulation at 0 cy/px (0–1].
     pub value: f64,
-    /// One-sigma uncertainty of `value` (noise, scatter and the choice of model).
+    /// One-sigma uncertainty of `value` (noise and scatter of the points used).
     pub err: f64,
     /// Lowest frequency used (cycles/pixel).
     pub f_lo: f64,
     /// Highest frequency used (cycles/pixel).
     pub f_hi: f64,
-    /// Weight (0–1) of the model with a linear start (diffraction-like) against
-    /// the even one (finite PSF spread: zero slope at 0).
-    pub linear_weight: f64,
+    /// Whether the curve was taken to start with a slope (a lens's diffraction):
+    /// true for the model M0·(1 + b f + c f²) with b < 0, false for the even
+    /// M0·(1 + b f² + c f⁴) used where the data show no falling start.
+    pub linear_start: bool,
 }
 
 /// Estimates the chart's modulation by extrapolating the low-frequency end of
 /// the (non-aliased) modulation curve to zero frequency.
 ///
 /// Only points at `s ≥ s_min` are used (the caller leaves out the periods
-/// whose estimator window runs past the strip's end). Two models are fitted to
-/// the points up to max(2 f_lo, f_lo + 0.05) cy/px, each by iteratively
-/// reweighted least squares (Tukey biweight on residuals scaled by the points'
-/// own uncertainty and a robust scale, so one bad point cannot drag the fit):
-/// the even M0·(1 + b f² + c f⁴) that any PSF of finite spread has, and
-/// M0·(1 + b f + c f²) with diffraction's linear start. The two are averaged
-/// with Akaike weights from their robust χ² (scaled by the larger model's
-/// dispersion, since neighbouring points share data); the uncertainty is
-/// the averaged fit variance plus the spread between the models.
+/// next to the strip's end). The model follows the physics of a camera's MTF
+/// near 0: every lens has a finite aperture, so its diffraction gives the
+/// curve a falling linear start, 1 − (4/π)·f/f_c for a circular pupil,
+/// whatever its aberrations (they, the pixel aperture, diffusion, defocus and
+/// sharpening are all even in f and start quadratically). So the points up to
+/// max(2 f_lo, f_lo + 0.05) cy/px are fitted with M0·(1 + b f + c f²) by
+/// iteratively reweighted least squares (Tukey biweight on residuals scaled
+/// by the points' own uncertainty and a robust scale, so one bad point cannot
+/// drag the fit). A rising start (b > 0) is not physical (|OTF| ≤ OTF(0) for
+/// any PSF whose rise is even): the even M0·(1 + b f² + c f⁴) is used then.
+/// Assuming an even start for a real lens (as before) put the chart
+/// modulation 1–4 % low (f/4–f/11 on 4.3 µm pixels).
 pub fn extrapolate_chart_modulation(
     points: &[MtfPoint],
     s_min: f64,
@@ -156,44 +160,36 @@ pub fn extrapolate_chart_modulation(
             (p.freq_cy_px / f_top, p.modulation, e)
         })
         .collect();
-    let even = robust_fit(&data, |x| [1.0, x * x, x.powi(4)]);
-    let linear = robust_fit(&data, |x| [1.0, x, x * x]);
-    let (even, linear) = match (even, linear) {
-        (Some(e), Some(l)) => (e, l),
-        (Some(e), None) => (e, e),
-        (None, Some(l)) => (l, l),
-        (None, None) => return Err("the low-frequency points do not determine a curve".into()),
+    let linear = robust_fit(&data, |x| [1.0, x, x * x]).filter(|l| l.slope <= 0.0);
+    let (fit, linear_start) = match linear {
+        Some(l) => (l, true),
+        None => (
+            robust_fit(&data, |x| [1.0, x * x, x.powi(4)])
+                .ok_or("the low-frequency points do not determine a curve")?,
+            false,
+        ),
     };
-    // Quasi-AIC: both models have three parameters, so only the fit counts;
-    // the linear start must win by LINEAR_EVIDENCE (a prior: at the low end of a
-    // sweep the lens's finite spread dominates unless diffraction's cutoff is
-    // low, and a slow bias in the lowest points must not pass for a slope).
-    let disp = (even.chi2.min(linear.chi2) / (even.dof.max(1.0))).max(1.0);
-    let d = (linear.chi2 - even.chi2) / disp + LINEAR_EVIDENCE;
-    let w_lin = 1.0 / (1.0 + (0.5 * d).clamp(-50.0, 50.0).exp());
-    let w_even = 1.0 - w_lin;
-    let value = w_even * even.m0 + w_lin * linear.m0;
-    let var = w_even * (even.var * disp.max(1.0) + (even.m0 - value).powi(2))
-        + w_lin * (linear.var * disp.max(1.0) + (linear.m0 - value).powi(2));
+    // Neighbouring points share data, so the scatter rather than the claimed
+    // uncertainty sets the variance where it is the larger.
+    let disp = (fit.chi2 / fit.dof.max(1.0)).max(1.0);
+    let value = fit.m0;
     if !(value > 0.0 && value.is_finite()) {
         return Err("the extrapolated chart modulation is not positive".into());
     }
     Ok(ChartModulation {
         value,
-        err: var.sqrt(),
+        err: (fit.var * disp).sqrt(),
         f_lo,
         f_hi: f_top,
-        linear_weight: w_lin,
+        linear_start,
     })
 }
-
-/// Quasi-AIC units by which the linear-start model must beat the even one to take half the weight.
-const LINEAR_EVIDENCE: f64 = 10.0;
 
 /// One robust fit: intercept, its variance, and the robust χ² with its degrees of freedom.
 #[derive(Debug, Clone, Copy)]
 struct RobustFit {
     m0: f64,
+    slope: f64,
     var: f64,
     chi2: f64,
     dof: f64,
@@ -258,6 +254,7 @@ fn robust_fit(data: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Opti
     }
     (coef[0].is_finite() && cov00.is_finite()).then_some(RobustFit {
         m0: coef[0],
+        slope: coef[1],
         var: cov00.max(0.0),
         chi2,
         dof: (wsum - 3.0).max(1.0),

@@ -28,10 +28,10 @@ pub(super) fn chart_modulation(
                     cm.f_lo,
                     cm.f_hi,
                     cm.err,
-                    if cm.linear_weight > 0.5 {
+                    if cm.linear_start {
                         ", linear start"
                     } else {
-                        ""
+                        ", even start"
                     }
                 ),
             ))

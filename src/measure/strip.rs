@@ -188,9 +188,10 @@ pub(super) fn measure_strip(
             "{channel}/{id}: fewer than 5 usable modulation points"
         )));
     }
-    // Leave out the periods whose estimator window runs past the strip's low end.
+    // Leave out the periods whose estimator window runs past the strip's low
+    // end (the estimator keeps points whose window holds ≥ 80 % of its cycles).
     let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
-    let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles + 2.0, s0, s1);
+    let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles, s0, s1);
     let (m_chart, m_chart_err, source) =
         normalise::chart_modulation(&points, s_min, contrast, channel, id)?;
     if m_chart_err > super::MAX_CHART_REL_ERR * m_chart {
