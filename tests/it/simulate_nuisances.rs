@@ -9,9 +9,8 @@
 //! Also the CLI: the files it writes, and the settings it refuses.
 
 use assert_cmd::Command;
-use sweepmtf::measure::{MeasureOptions, measure_decoded};
+use sweepmtf::measure::{MeasureOptions, measure_bytes};
 use sweepmtf::model::System;
-use sweepmtf::photo::decode::decode_bytes;
 use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for};
 use sweepmtf::simulate::{Camera, LightGradient, PhotoFormat, Sharpen, Shot, render};
 use sweepmtf::target::SweepLaw;
@@ -48,13 +47,13 @@ fn truth_at(shot: &Shot, f: f64) -> f64 {
 /// (RMS, MTF50 relative error, chart modulation, measured peak) of the shot encoded as `format`.
 fn score(name: &str, shot: &Shot, format: PhotoFormat) -> (f64, f64, f64, f64) {
     let bytes = shot.encode(format).unwrap();
-    let dec = decode_bytes(&bytes, name).unwrap();
     let r = shot.roi().unwrap();
     let opts = MeasureOptions {
         roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
         ..MeasureOptions::default()
     };
-    let m = measure_decoded(&dec, name, None, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
+    // As `measure` reads the file (for a JPEG: the luma plane Y′ alone).
+    let m = measure_bytes(&bytes, name, None, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
     let c = &m.curves[0];
     let (mut se, mut n) = (0.0, 0);
     for p in c.points.iter().filter(|p| !p.aliased) {
