@@ -240,14 +240,14 @@ pub(super) fn measure_decoded_at(
     let (tone, tone_desc) =
         photo_tone(dec, target, opts, crop, &roi, &mut said.notes).map_err(err)?;
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
-    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), || {
-        let pad = super::lens_fit::search_pad_px(&roi, dec.width, dec.height);
-        let mut c = bbox_crop(&roi, dec.width, dec.height, pad);
+    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), |q| {
+        let pad = super::lens_fit::search_pad_px(q, dec.width, dec.height);
+        let mut c = bbox_crop(q, dec.width, dec.height, pad);
         // A JPEG may be decoded only down to just below the region.
         c.y1 = c.y1.min(dec.rows).max(c.y0);
         // Only the bands about the long edges that the estimate searches (the
         // strip's middle is never read): less to convert and to keep.
-        let band = |y: usize| super::lens_fit::edge_band_span(&roi, pad + 2.0, y);
+        let band = |y: usize| super::lens_fit::edge_band_span(q, pad + 2.0, y);
         planes_within(dec, c, &tone, Channel::Luma, &band).swap_remove(0)
     })
     .map_err(err)?;

@@ -317,23 +317,43 @@ fn given_distortion(
     Ok(Some(lens_fit::given(model, roi, width, height)))
 }
 
-/// The distortion of a shot: as given, or estimated from the strip's edges in
-/// `luma` (a plane reaching [`lens_fit::search_pad_px`] beyond the region),
-/// or none (with a target, or when estimating is off).
+/// The distortion of a shot: as given, or estimated from the long edges of
+/// the strip (or, with a target, of the first sweep strip whose edges give a
+/// clear answer) in the planes `luma(quad)` returns
+/// (luminance reaching [`lens_fit::search_pad_px`] beyond `quad`), or none
+/// when estimating is off.
 fn resolve_distortion(
     opts: &MeasureOptions,
     roi: &[Point; 4],
     target: Option<&Target>,
     size: (usize, usize),
-    luma: impl FnOnce() -> Plane,
+    luma: impl Fn(&[Point; 4]) -> Plane,
 ) -> Result<Option<DistortionFound>, Failure> {
     if opts.distortion.is_some() {
         return given_distortion(opts, roi, size.0, size.1);
     }
-    if !opts.estimate_distortion || target.is_some() {
+    if !opts.estimate_distortion {
         return Ok(None);
     }
-    Ok(Some(lens_fit::estimate(&luma(), roi, size.0, size.1)))
+    let Some(t) = target else {
+        return Ok(Some(lens_fit::estimate(&luma(roi), roi, size.0, size.1)));
+    };
+    // Before, a target's strips were binned as if straight: a 3.6 % pincushion
+    // put MTF50 29 % low on one strip and 5 % high on another. The strips are
+    // tried in the target's order until one's edges give a clear answer
+    // (a model used, or edges found all along and no distortion in them).
+    let mut tried: Vec<DistortionFound> = Vec::new();
+    for (_, q) in region::target_strip_quads(t, roi)? {
+        let d = lens_fit::estimate(&luma(&q), &q, size.0, size.1);
+        let clear = d.used().is_some()
+            || d.edge_coverage
+                .is_some_and(|c| c >= lens_fit::MIN_EDGE_COVERAGE);
+        if clear {
+            return Ok(Some(d));
+        }
+        tried.push(d);
+    }
+    Ok(tried.into_iter().max_by_key(|d| d.edge_points))
 }
 
 /// [`measure_planes`] with the distortion already resolved.
