@@ -8,8 +8,8 @@ use super::preview::{make_preview, raw_preview};
 use super::region::{bbox_crop, read_set};
 use super::tone::photo_tone;
 use super::{
-    Failure, MeasureError, MeasureOptions, Measurement, Said, given_distortion,
-    measure_planes_lens, resolve_distortion,
+    Failure, MeasureError, MeasureOptions, Measurement, Said, measure_planes_lens,
+    resolve_distortion,
 };
 use crate::geometry::Point;
 use crate::photo::Plane;
@@ -136,9 +136,21 @@ pub(super) fn measure_frame_at(
     if opts.gamma.is_some() || opts.tone_chart {
         warnings.push("raw data is linear: --gamma and --tone are ignored".to_string());
     }
-    // Only what binning reads is converted to f32.
-    let distortion = given_distortion(opts, &roi, frame.width, frame.height).map_err(err)?;
+    // The distortion as given, or estimated from the strip's (or the target's
+    // strips') long edges in one green lattice (the edge search samples
+    // bilinearly in the lattice's own steps), read only about those edges.
+    let (w, h) = (frame.width, frame.height);
+    let distortion = resolve_distortion(opts, &roi, target, (w, h), |q| {
+        let pad = super::lens_fit::search_pad_px(q, w, h);
+        let c = bbox_crop(q, w, h, pad);
+        let band = |y: usize| super::lens_fit::edge_band_span(q, pad + 2.0, y);
+        let mut groups =
+            frame.channel_groups_within(RawChannel::G, (c.x0, c.y0, c.x1, c.y1), &band);
+        groups.swap_remove(0).1.swap_remove(0)
+    })
+    .map_err(err)?;
     let lens = distortion.and_then(|d| d.lens(frame.width, frame.height));
+    // Only what binning reads is converted to f32.
     let (crop, span) = read_set(
         &roi,
         target,

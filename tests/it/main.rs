@@ -39,7 +39,7 @@ mod locate_timing;
 mod measure_accuracy;
 mod measure_cli;
 mod measure_distortion;
-mod measure_distortion_target;
+mod measure_distortion_estimated;
 mod measure_model;
 mod measure_nuisances;
 mod measure_raw;
