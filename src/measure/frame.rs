@@ -146,7 +146,7 @@ pub(super) fn measure_frame_at(
         let band = |y: usize| super::lens_fit::edge_band_span(q, pad + 2.0, y);
         let mut groups =
             frame.channel_groups_within(RawChannel::G, (c.x0, c.y0, c.x1, c.y1), &band);
-        groups.swap_remove(0).1.swap_remove(0)
+        Box::new(groups.swap_remove(0).1.swap_remove(0))
     })
     .map_err(err)?;
     let lens = distortion.and_then(|d| d.lens(frame.width, frame.height));
@@ -252,15 +252,16 @@ pub(super) fn measure_decoded_at(
     let (tone, tone_desc) =
         photo_tone(dec, target, opts, crop, &roi, &mut said.notes).map_err(err)?;
     let clip_level = (tone.apply(1.0) * 0.999) as f32;
-    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), |q| {
-        let pad = super::lens_fit::search_pad_px(q, dec.width, dec.height);
-        let mut c = bbox_crop(q, dec.width, dec.height, pad);
-        // A JPEG may be decoded only down to just below the region.
-        c.y1 = c.y1.min(dec.rows).max(c.y0);
-        // Only the bands about the long edges that the estimate searches (the
-        // strip's middle is never read): less to convert and to keep.
-        let band = |y: usize| super::lens_fit::edge_band_span(q, pad + 2.0, y);
-        planes_within(dec, c, &tone, Channel::Luma, &band).swap_remove(0)
+    // The edge searches read a few thousand places about the long edges:
+    // converted where read, so no plane is kept for them (on a 24 MP strip
+    // the bands were 17.5 MB of the peak memory).
+    let at = crate::photo::linearise::pixel_converter(dec, &tone, Channel::Luma);
+    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), |_| {
+        Box::new(super::lens_fit::Converted {
+            at: &at,
+            width: dec.width,
+            rows: dec.rows,
+        })
     })
     .map_err(err)?;
     let lens = distortion.and_then(|d| d.lens(dec.width, dec.height));

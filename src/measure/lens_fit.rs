@@ -213,23 +213,61 @@ fn b_max(width: usize, height: usize) -> f64 {
     MAX_CORNER_PERCENT / 100.0 / (rc2 - 1.0).max(0.05)
 }
 
-/// Bilinear value of `plane` at photo point (x, y) (pixel centres at +0.5), if inside.
-fn sample(plane: &Plane, x: f64, y: f64) -> Option<f64> {
-    let fx = (x - 0.5 - plane.offset.0 as f64) / plane.step.0 as f64;
-    let fy = (y - 0.5 - plane.offset.1 as f64) / plane.step.1 as f64;
-    if !(fx >= 0.0 && fy >= 0.0) {
-        return None;
+/// Linear luminance at any photo point, as the edge searches read it.
+pub trait Sampler {
+    /// Bilinear value at photo point (x, y) px (pixel centres at +0.5), if inside.
+    fn bilinear(&self, x: f64, y: f64) -> Option<f64>;
+}
+
+impl Sampler for Plane {
+    fn bilinear(&self, x: f64, y: f64) -> Option<f64> {
+        let fx = (x - 0.5 - self.offset.0 as f64) / self.step.0 as f64;
+        let fy = (y - 0.5 - self.offset.1 as f64) / self.step.1 as f64;
+        if !(fx >= 0.0 && fy >= 0.0) {
+            return None;
+        }
+        let (i, j) = (fx.floor() as usize, fy.floor() as usize);
+        if i + 1 >= self.width || j + 1 >= self.height {
+            return None;
+        }
+        let (u, v) = (fx - i as f64, fy - j as f64);
+        let at = |i: usize, j: usize| self.data[j * self.width + i] as f64;
+        Some(
+            (1.0 - v) * ((1.0 - u) * at(i, j) + u * at(i + 1, j))
+                + v * ((1.0 - u) * at(i, j + 1) + u * at(i + 1, j + 1)),
+        )
     }
-    let (i, j) = (fx.floor() as usize, fy.floor() as usize);
-    if i + 1 >= plane.width || j + 1 >= plane.height {
-        return None;
+}
+
+/// Samples converted from the photo's codes where they are read (no plane is
+/// kept): `at(x, y)` is pixel (x, y)'s linear value in an image `width` px
+/// wide whose first `rows` rows hold the picture.
+pub struct Converted<F> {
+    /// One pixel's linear value (as [`crate::photo::linearise::pixel_converter`]).
+    pub at: F,
+    /// Image width, px.
+    pub width: usize,
+    /// Rows that hold the picture.
+    pub rows: usize,
+}
+
+impl<F: Fn(usize, usize) -> f32> Sampler for Converted<F> {
+    fn bilinear(&self, x: f64, y: f64) -> Option<f64> {
+        let (fx, fy) = (x - 0.5, y - 0.5);
+        if !(fx >= 0.0 && fy >= 0.0) {
+            return None;
+        }
+        let (i, j) = (fx.floor() as usize, fy.floor() as usize);
+        if i + 1 >= self.width || j + 1 >= self.rows {
+            return None;
+        }
+        let (u, v) = (fx - i as f64, fy - j as f64);
+        let at = |i: usize, j: usize| f64::from((self.at)(i, j));
+        Some(
+            (1.0 - v) * ((1.0 - u) * at(i, j) + u * at(i + 1, j))
+                + v * ((1.0 - u) * at(i, j + 1) + u * at(i + 1, j + 1)),
+        )
     }
-    let (u, v) = (fx - i as f64, fy - j as f64);
-    let at = |i: usize, j: usize| plane.data[j * plane.width + i] as f64;
-    Some(
-        (1.0 - v) * ((1.0 - u) * at(i, j) + u * at(i + 1, j))
-            + v * ((1.0 - u) * at(i, j + 1) + u * at(i + 1, j + 1)),
-    )
 }
 
 /// Edge points along the long edge from photo corner `a` to `b`, searched
@@ -237,7 +275,7 @@ fn sample(plane: &Plane, x: f64, y: f64) -> Option<f64> {
 /// `towards` is a point inside the strip, `depth_in` how far (px) the strip
 /// reaches inside.
 fn edge_points(
-    plane: &Plane,
+    plane: &dyn Sampler,
     (a, b): (Point, Point),
     (oa, ob): (Point, Point),
     depth_in: f64,
@@ -278,7 +316,7 @@ fn edge_points(
             for e in [-2.0, -1.0, 0.0, 1.0, 2.0] {
                 let x = c[0] - d * inward[0] + e * dir[0];
                 let y = c[1] - d * inward[1] + e * dir[1];
-                match sample(plane, x, y) {
+                match plane.bilinear(x, y) {
                     Some(v) => acc += v,
                     None => {
                         ok = false;
@@ -383,7 +421,12 @@ fn parabola(edges: &[Vec<Point>; 2], b0: f64, h: f64, w: usize, ht: usize) -> (f
 /// `roi` (corners 1→2 and 4→3 are the long edges) in `plane` (luminance, linear;
 /// it must reach [`search_pad_px`] beyond the strip's bounding box). The result says whether the model
 /// is used ([`DistortionSource::Estimated`]) or not, and why not.
-pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) -> DistortionFound {
+pub fn estimate(
+    plane: &dyn Sampler,
+    roi: &[Point; 4],
+    width: usize,
+    height: usize,
+) -> DistortionFound {
     let mid = |a: Point, b: Point| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
     let (m0, m1) = (mid(roi[0], roi[1]), mid(roi[3], roi[2]));
     let depth = (m1[0] - m0[0]).hypot(m1[1] - m0[1]);
@@ -459,7 +502,7 @@ pub fn estimate(plane: &Plane, roi: &[Point; 4], width: usize, height: usize) ->
 /// fitted; then (when the fit moves the edges by 2 px or more) again about
 /// the curves the fit predicts, up to three rounds.
 fn follow(
-    plane: &Plane,
+    plane: &dyn Sampler,
     roi: &[Point; 4],
     depth: f64,
     start: Option<Lens>,

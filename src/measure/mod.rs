@@ -319,15 +319,14 @@ fn given_distortion(
 
 /// The distortion of a shot: as given, or estimated from the long edges of
 /// the strip (or, with a target, of the first sweep strip whose edges give a
-/// clear answer) in the planes `luma(quad)` returns
-/// (luminance reaching [`lens_fit::search_pad_px`] beyond `quad`), or none
-/// when estimating is off.
-fn resolve_distortion(
+/// clear answer) in the luminance `luma(quad)` gives (it must reach
+/// [`lens_fit::search_pad_px`] beyond `quad`), or none when estimating is off.
+fn resolve_distortion<'a>(
     opts: &MeasureOptions,
     roi: &[Point; 4],
     target: Option<&Target>,
     size: (usize, usize),
-    luma: impl Fn(&[Point; 4]) -> Plane,
+    luma: impl Fn(&[Point; 4]) -> Box<dyn lens_fit::Sampler + 'a>,
 ) -> Result<Option<DistortionFound>, Failure> {
     if opts.distortion.is_some() {
         return given_distortion(opts, roi, size.0, size.1);
@@ -336,7 +335,7 @@ fn resolve_distortion(
         return Ok(None);
     }
     let Some(t) = target else {
-        return Ok(Some(lens_fit::estimate(&luma(roi), roi, size.0, size.1)));
+        return Ok(Some(lens_fit::estimate(&*luma(roi), roi, size.0, size.1)));
     };
     // Before, a target's strips were binned as if straight: a 3.6 % pincushion
     // put MTF50 29 % low on one strip and 5 % high on another. The strips are
@@ -344,7 +343,7 @@ fn resolve_distortion(
     // (a model used, or edges found all along and no distortion in them).
     let mut tried: Vec<DistortionFound> = Vec::new();
     for (_, q) in region::target_strip_quads(t, roi)? {
-        let d = lens_fit::estimate(&luma(&q), &q, size.0, size.1);
+        let d = lens_fit::estimate(&*luma(&q), &q, size.0, size.1);
         let clear = d.used().is_some()
             || d.edge_coverage
                 .is_some_and(|c| c >= lens_fit::MIN_EDGE_COVERAGE);

@@ -313,6 +313,47 @@ pub fn row_converter<'a>(
     }
 }
 
+/// A pixel converter for the first plane [`planes`] gives for `channel`:
+/// `at(x, y)` is the linear value of image pixel (x, y), exactly as the plane
+/// holds it (the same table and sum as [`row_converter`]), for reading a few
+/// scattered pixels without converting rows.
+pub fn pixel_converter<'a>(
+    dec: &'a Decoded,
+    tone: &Tone,
+    channel: Channel,
+) -> impl Fn(usize, usize) -> f32 + Sync + use<'a> {
+    let lut = match dec.samples {
+        Samples::U8(_) => tone.lut(256),
+        Samples::U16(_) => tone.lut(65536),
+        Samples::F32(_) => Vec::new(),
+    };
+    let nc = dec.channels;
+    let mix = mixes(channel, nc).swap_remove(0);
+    let tone = tone.clone();
+    move |x: usize, y: usize| {
+        let i = (y * dec.width + x) * nc;
+        match &dec.samples {
+            Samples::U8(v) => mixed(&mix, |c| lut[v[i + c] as usize]),
+            Samples::U16(v) => mixed(&mix, |c| lut[v[i + c] as usize]),
+            Samples::F32(v) => {
+                let mut one = [0f32];
+                convert_row_f32(&mut one, &v[i..i + nc], nc, &mix, &tone);
+                one[0]
+            }
+        }
+    }
+}
+
+/// One pixel's weighted sum of linear channels `lin(c)`, in [`convert_row`]'s order.
+#[inline]
+fn mixed(mix: &[(usize, f32)], lin: impl Fn(usize) -> f32) -> f32 {
+    match mix {
+        [(c, _)] => lin(*c),
+        [(c0, w0), (c1, w1), (c2, w2)] => w0 * lin(*c0) + w1 * lin(*c1) + w2 * lin(*c2),
+        _ => mix.iter().map(|&(c, wt)| wt * lin(c)).sum(),
+    }
+}
+
 /// Converts one row of interleaved codes to a weighted sum of linear channels.
 #[inline]
 fn convert_row<T: Copy + Into<usize>>(
