@@ -223,19 +223,9 @@ impl Sampler for Plane {
     fn bilinear(&self, x: f64, y: f64) -> Option<f64> {
         let fx = (x - 0.5 - self.offset.0 as f64) / self.step.0 as f64;
         let fy = (y - 0.5 - self.offset.1 as f64) / self.step.1 as f64;
-        if !(fx >= 0.0 && fy >= 0.0) {
-            return None;
-        }
-        let (i, j) = (fx.floor() as usize, fy.floor() as usize);
-        if i + 1 >= self.width || j + 1 >= self.height {
-            return None;
-        }
-        let (u, v) = (fx - i as f64, fy - j as f64);
-        let at = |i: usize, j: usize| self.data[j * self.width + i] as f64;
-        Some(
-            (1.0 - v) * ((1.0 - u) * at(i, j) + u * at(i + 1, j))
-                + v * ((1.0 - u) * at(i, j + 1) + u * at(i + 1, j + 1)),
-        )
+        blend(fx, fy, (self.width, self.height), |i, j| {
+            self.data[j * self.width + i] as f64
+        })
     }
 }
 
@@ -253,21 +243,27 @@ pub struct Converted<F> {
 
 impl<F: Fn(usize, usize) -> f32> Sampler for Converted<F> {
     fn bilinear(&self, x: f64, y: f64) -> Option<f64> {
-        let (fx, fy) = (x - 0.5, y - 0.5);
-        if !(fx >= 0.0 && fy >= 0.0) {
-            return None;
-        }
-        let (i, j) = (fx.floor() as usize, fy.floor() as usize);
-        if i + 1 >= self.width || j + 1 >= self.rows {
-            return None;
-        }
-        let (u, v) = (fx - i as f64, fy - j as f64);
-        let at = |i: usize, j: usize| f64::from((self.at)(i, j));
-        Some(
-            (1.0 - v) * ((1.0 - u) * at(i, j) + u * at(i + 1, j))
-                + v * ((1.0 - u) * at(i, j + 1) + u * at(i + 1, j + 1)),
-        )
+        blend(x - 0.5, y - 0.5, (self.width, self.rows), |i, j| {
+            f64::from((self.at)(i, j))
+        })
     }
+}
+
+/// Bilinear blend at grid position (fx, fy) of a `size` (columns, rows) grid
+/// whose node (i, j) holds `at(i, j)`; `None` outside.
+fn blend(fx: f64, fy: f64, size: (usize, usize), at: impl Fn(usize, usize) -> f64) -> Option<f64> {
+    if !(fx >= 0.0 && fy >= 0.0) {
+        return None;
+    }
+    let (i, j) = (fx.floor() as usize, fy.floor() as usize);
+    if i + 1 >= size.0 || j + 1 >= size.1 {
+        return None;
+    }
+    let (u, v) = (fx - i as f64, fy - j as f64);
+    Some(
+        (1.0 - v) * ((1.0 - u) * at(i, j) + u * at(i + 1, j))
+            + v * ((1.0 - u) * at(i, j + 1) + u * at(i + 1, j + 1)),
+    )
 }
 
 /// Edge points along the long edge from photo corner `a` to `b`, searched

@@ -342,7 +342,7 @@ fn resolve_distortion<'a>(
     // tried in the target's order until one's edges give a clear answer
     // (a model used, or edges found all along and no distortion in them).
     let mut tried: Vec<DistortionFound> = Vec::new();
-    for (_, q) in region::target_strip_quads(t, roi)? {
+    for q in region::target_strip_quads(t, roi)? {
         let d = lens_fit::estimate(&*luma(&q), &q, size.0, size.1);
         let clear = d.used().is_some()
             || d.edge_coverage

@@ -255,19 +255,14 @@ pub(super) fn strips(
 
 /// Each sweep strip of a target whose frame corners are `roi`, as its photo
 /// corners (corners 1→2 and 4→3 run along the sweep, as for a strip given by
-/// hand), with its id; the lens's distortion is not applied.
-pub(super) fn target_strip_quads(
-    t: &Target,
-    roi: &[Point; 4],
-) -> Result<Vec<(String, [Point; 4])>, Failure> {
+/// hand); the lens's distortion is not applied.
+pub(super) fn target_strip_quads(t: &Target, roi: &[Point; 4]) -> Result<Vec<[Point; 4]>, Failure> {
     let h = target_homography(t, roi)?;
     Ok(t.sweeps
         .iter()
         .map(|sw| {
             let st = sweep_strip(&h, sw);
-            let (l, w) = (st.length, st.width);
-            let q = [[0.0, 0.0], [l, 0.0], [l, w], [0.0, w]].map(|p| st.to_image.apply(p));
-            (sw.id.clone(), q)
+            st.image_quad(0.0, st.width)
         })
         .collect())
 }

@@ -232,12 +232,7 @@ pub fn planes_within(
 ) -> Vec<Plane> {
     debug_assert!(crop.y1 <= dec.rows, "rows below the decoded part are read");
     let (w, h) = (crop.x1 - crop.x0, crop.y1 - crop.y0);
-    // Integer codes go through a lookup table; float codes through the tone itself.
-    let lut = match dec.samples {
-        Samples::U8(_) => tone.lut(256),
-        Samples::U16(_) => tone.lut(65536),
-        Samples::F32(_) => Vec::new(),
-    };
+    let lut = code_lut(dec, tone);
     let nc = dec.channels;
     mixes(channel, nc)
         .iter()
@@ -270,6 +265,16 @@ pub fn planes_within(
         .collect()
 }
 
+/// The linear value of every integer code of `dec` under `tone` (integer
+/// codes go through this table; float codes through the tone itself: empty).
+fn code_lut(dec: &Decoded, tone: &Tone) -> Vec<f32> {
+    match dec.samples {
+        Samples::U8(_) => tone.lut(256),
+        Samples::U16(_) => tone.lut(65536),
+        Samples::F32(_) => Vec::new(),
+    }
+}
+
 /// Which channels feed each plane of [`planes`], and with what weight.
 fn mixes(channel: Channel, nc: usize) -> Vec<Vec<(usize, f32)>> {
     if nc == 1 {
@@ -295,11 +300,7 @@ pub fn row_converter<'a>(
     tone: &Tone,
     channel: Channel,
 ) -> impl Fn(usize, usize, &mut [f32]) + Sync + use<'a> {
-    let lut = match dec.samples {
-        Samples::U8(_) => tone.lut(256),
-        Samples::U16(_) => tone.lut(65536),
-        Samples::F32(_) => Vec::new(),
-    };
+    let lut = code_lut(dec, tone);
     let nc = dec.channels;
     let mix = mixes(channel, nc).swap_remove(0);
     let tone = tone.clone();
@@ -322,11 +323,7 @@ pub fn pixel_converter<'a>(
     tone: &Tone,
     channel: Channel,
 ) -> impl Fn(usize, usize) -> f32 + Sync + use<'a> {
-    let lut = match dec.samples {
-        Samples::U8(_) => tone.lut(256),
-        Samples::U16(_) => tone.lut(65536),
-        Samples::F32(_) => Vec::new(),
-    };
+    let lut = code_lut(dec, tone);
     let nc = dec.channels;
     let mix = mixes(channel, nc).swap_remove(0);
     let tone = tone.clone();
