@@ -245,11 +245,13 @@ pub fn outputs(
         PlotFormat::Png => "mtf.png",
         PlotFormat::Svg => "mtf.svg",
     };
-    files.push((
-        out(plot_ext),
-        mtf_plot_with(m, plot, &extras.plot).map_err(out_err)?,
-    ));
-    files.push((out("roi.png"), roi_plot::roi_plot(m).map_err(out_err)?));
+    // The two pictures are drawn and encoded side by side.
+    let (mtf_png, roi_png) = rayon::join(
+        || mtf_plot_with(m, plot, &extras.plot),
+        || roi_plot::roi_plot(m),
+    );
+    files.push((out(plot_ext), mtf_png.map_err(out_err)?));
+    files.push((out("roi.png"), roi_png.map_err(out_err)?));
     let summary_value = extras.json(summary(m, Some(timings)), m);
     let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
     summary_text.push('\n');

@@ -27,6 +27,7 @@
 use crate::distortion::{Lens, MAX_CORNER_PERCENT, Ptlens};
 use crate::geometry::Point;
 use crate::photo::Plane;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Smallest bow (px) of the strip's edges for which an estimated distortion is used.
@@ -214,7 +215,7 @@ fn b_max(width: usize, height: usize) -> f64 {
 }
 
 /// Linear luminance at any photo point, as the edge searches read it.
-pub trait Sampler {
+pub trait Sampler: Sync {
     /// Bilinear value at photo point (x, y) px (pixel centres at +0.5), if inside.
     fn bilinear(&self, x: f64, y: f64) -> Option<f64>;
 }
@@ -241,7 +242,7 @@ pub struct Converted<F> {
     pub rows: usize,
 }
 
-impl<F: Fn(usize, usize) -> f32> Sampler for Converted<F> {
+impl<F: Fn(usize, usize) -> f32 + Sync> Sampler for Converted<F> {
     fn bilinear(&self, x: f64, y: f64) -> Option<f64> {
         blend(x - 0.5, y - 0.5, (self.width, self.rows), |i, j| {
             f64::from((self.at)(i, j))
@@ -289,9 +290,9 @@ fn edge_points(
     let h_out = 12.0;
     let step = 0.25;
     let n = ((len / 6.0) as usize).clamp(16, 400).min(most);
-    // (edge point, sign of the step outside − inside)
-    let mut out: Vec<(Point, bool)> = Vec::new();
-    for k in 0..n {
+    // (edge point, sign of the step outside − inside), the places in parallel
+    // (each reads a hundred-odd profile steps of five samples).
+    let place = |k: usize| -> Option<(Point, bool)> {
         let u = 0.04 + 0.92 * (k as f64 + 0.5) / n as f64;
         let c = at(u);
         let (p0, p1) = (at(u - 1e-3), at(u + 1e-3));
@@ -326,14 +327,14 @@ fn edge_points(
             prof.push((d, acc / 5.0));
         }
         if !ok || prof.len() < 8 {
-            continue;
+            return None;
         }
         let q = prof.len() / 4;
         let inside = prof[..q].iter().map(|p| p.1).sum::<f64>() / q as f64;
         let outside = prof[prof.len() - q..].iter().map(|p| p.1).sum::<f64>() / q as f64;
         let step_h = outside - inside;
         if step_h.abs() < 0.03 * outside.abs().max(inside.abs()).max(1e-6) {
-            continue;
+            return None;
         }
         let mid = 0.5 * (inside + outside);
         // The crossing of the mid level nearest the predicted edge.
@@ -347,13 +348,10 @@ fn edge_points(
                 }
             }
         }
-        if let Some(d) = best
-            && d > -0.8 * h_in
-            && d < 0.8 * h_out
-        {
-            out.push(([c[0] - d * inward[0], c[1] - d * inward[1]], step_h > 0.0));
-        }
-    }
+        best.filter(|&d| d > -0.8 * h_in && d < 0.8 * h_out)
+            .map(|d| ([c[0] - d * inward[0], c[1] - d * inward[1]], step_h > 0.0))
+    };
+    let out: Vec<(Point, bool)> = (0..n).into_par_iter().filter_map(place).collect();
     // A printed edge has one sign of step all along (the strip darker or
     // lighter than its surround); the pattern itself flips sign with its phase.
     let up = out.iter().filter(|p| p.1).count();
@@ -442,26 +440,34 @@ pub fn estimate(
         // A quick probe (48 places per edge) about each model's curves picks
         // the one along which most of both edges is found; only that one is followed.
         let b_step = b_max / 5.0;
+        let models: Vec<i32> = (-5..=5).filter(|&k| k != 0).collect();
+        let probed: Vec<Option<(f64, Lens)>> = models
+            .par_iter()
+            .map(|&k| {
+                let start = Lens::new(
+                    Ptlens {
+                        a: 0.0,
+                        b: k as f64 * b_step * 0.975,
+                        c: 0.0,
+                    },
+                    width,
+                    height,
+                );
+                if start.check().is_err() {
+                    return None;
+                }
+                let probe = |a: Point, b: Point, oa: Point, ob: Point| {
+                    let (e, n) = edge_points(plane, (a, b), (oa, ob), depth, Some(&start), 48);
+                    e.len() as f64 / n.max(1) as f64
+                };
+                let found = probe(roi[0], roi[1], roi[3], roi[2])
+                    .min(probe(roi[3], roi[2], roi[0], roi[1]));
+                Some((found, start))
+            })
+            .collect();
+        // The first of the best (in the ladder's order, as a sequential search would pick).
         let mut best: Option<(f64, Lens)> = None;
-        for k in (-5..=5).filter(|&k| k != 0) {
-            let start = Lens::new(
-                Ptlens {
-                    a: 0.0,
-                    b: k as f64 * b_step * 0.975,
-                    c: 0.0,
-                },
-                width,
-                height,
-            );
-            if start.check().is_err() {
-                continue;
-            }
-            let probe = |a: Point, b: Point, oa: Point, ob: Point| {
-                let (e, n) = edge_points(plane, (a, b), (oa, ob), depth, Some(&start), 48);
-                e.len() as f64 / n.max(1) as f64
-            };
-            let found =
-                probe(roi[0], roi[1], roi[3], roi[2]).min(probe(roi[3], roi[2], roi[0], roi[1]));
+        for (found, start) in probed.into_iter().flatten() {
             if best.as_ref().is_none_or(|b| found > b.0) {
                 best = Some((found, start));
             }
@@ -508,21 +514,27 @@ fn follow(
     let mut lens = start;
     let mut result: Option<DistortionFound> = None;
     for _ in 0..3 {
-        let (e0, n0) = edge_points(
-            plane,
-            (roi[0], roi[1]),
-            (roi[3], roi[2]),
-            depth,
-            lens.as_ref(),
-            usize::MAX,
-        );
-        let (e1, n1) = edge_points(
-            plane,
-            (roi[3], roi[2]),
-            (roi[0], roi[1]),
-            depth,
-            lens.as_ref(),
-            usize::MAX,
+        let ((e0, n0), (e1, n1)) = rayon::join(
+            || {
+                edge_points(
+                    plane,
+                    (roi[0], roi[1]),
+                    (roi[3], roi[2]),
+                    depth,
+                    lens.as_ref(),
+                    usize::MAX,
+                )
+            },
+            || {
+                edge_points(
+                    plane,
+                    (roi[3], roi[2]),
+                    (roi[0], roi[1]),
+                    depth,
+                    lens.as_ref(),
+                    usize::MAX,
+                )
+            },
         );
         let Some(found) = fit_edges(
             [e0, e1],

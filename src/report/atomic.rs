@@ -58,27 +58,47 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
 /// Writes several files: all are written to temporaries first, and only when
 /// every one succeeded are they renamed into place (temporaries are removed on failure).
 pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), ReportError> {
-    let mut temps: Vec<PathBuf> = Vec::new();
+    use rayon::prelude::*;
+    // Written and flushed to disk in parallel: each `sync_all` may wait for
+    // the file system's journal, and one wait then serves them all.
+    let written: Vec<std::io::Result<PathBuf>> = files
+        .par_iter()
+        .map(|(path, bytes)| {
+            let tmp = temp_name(path);
+            let res = std::fs::File::create(&tmp).and_then(|mut f| {
+                f.write_all(bytes)?;
+                f.sync_all()
+            });
+            match res {
+                Ok(()) => Ok(tmp),
+                Err(e) => {
+                    let _ = std::fs::remove_file(&tmp);
+                    Err(e)
+                }
+            }
+        })
+        .collect();
     let cleanup = |temps: &[PathBuf]| {
         for t in temps {
             let _ = std::fs::remove_file(t);
         }
     };
-    for (path, bytes) in files {
-        let tmp = temp_name(path);
-        let res = std::fs::File::create(&tmp).and_then(|mut f| {
-            f.write_all(bytes)?;
-            f.sync_all()
-        });
-        if let Err(e) = res {
-            let _ = std::fs::remove_file(&tmp);
-            cleanup(&temps);
-            return Err(io(path, e));
+    let mut temps = Vec::with_capacity(files.len());
+    let mut failed = None;
+    for (k, r) in written.into_iter().enumerate() {
+        match r {
+            Ok(t) => temps.push(t),
+            Err(e) => {
+                failed.get_or_insert((k, e));
+            }
         }
-        temps.push(tmp);
     }
-    for (k, (path, _)) in files.iter().enumerate() {
-        if let Err(e) = std::fs::rename(&temps[k], path) {
+    if let Some((k, e)) = failed {
+        cleanup(&temps);
+        return Err(io(&files[k].0, e));
+    }
+    for (k, ((path, _), tmp)) in files.iter().zip(&temps).enumerate() {
+        if let Err(e) = std::fs::rename(tmp, path) {
             cleanup(&temps[k..]);
             return Err(io(path, e));
         }
