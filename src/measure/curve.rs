@@ -138,7 +138,24 @@ pub fn extrapolate_chart_modulation(
              give --target with the printed contrast or a region that starts below 0.08 cy/px"
         ));
     }
-    let f_hi = (f_lo + 0.05).max(2.0 * f_lo);
+    // Two estimates; the one with the smaller uncertainty is kept.
+    let near = near_estimate(&pts, f_lo)?;
+    Ok(match log_estimate(&pts, f_lo) {
+        Some(w) if w.err < near.err => w,
+        _ => near,
+    })
+}
+
+/// The lowest points, at most `move_max` (relative) from the first ones' modulation,
+/// up to max(2 f_lo, f_lo + `span`) cy/px (at least `least` points when there are).
+fn start_points<'a>(
+    pts: &[&'a MtfPoint],
+    f_lo: f64,
+    span: f64,
+    move_max: f64,
+    least: usize,
+) -> Vec<&'a MtfPoint> {
+    let f_hi = (f_lo + span).max(2.0 * f_lo);
     let mut sel: Vec<&MtfPoint> = pts
         .iter()
         .copied()
@@ -147,31 +164,35 @@ pub fn extrapolate_chart_modulation(
     if sel.len() < 8 {
         sel = pts.iter().copied().take(8).collect();
     }
-    if sel.len() < 5 {
-        return Err("too few low-frequency points to extrapolate to zero frequency".into());
-    }
-    // A low-order expansion holds only while the curve has moved little: with
-    // strong carrier diffusion (10 µm on 4.3 µm pixels) and blur the
-    // modulation falls 25 % over 0.05 cy/px and a quadratic through all of it
-    // landed 3.2 % high at 0 (2.1 % with this cut). Keep the points (at least
-    // 5) within MAX_MOVE of the first ones.
     let mut first: Vec<f64> = sel.iter().take(3).map(|p| p.modulation).collect();
     first.sort_by(f64::total_cmp);
     let reference = first[first.len() / 2];
     let within = sel
         .iter()
-        .position(|p| (p.modulation / reference - 1.0).abs() > MAX_MOVE)
+        .position(|p| (p.modulation / reference - 1.0).abs() > move_max)
         .unwrap_or(sel.len());
-    sel.truncate(within.max(5));
-    let f_top = sel.last().map(|p| p.freq_cy_px).unwrap_or(f_hi);
+    sel.truncate(within.max(least));
+    sel
+}
+
+/// A point's modulation uncertainty, with a floor so that noiseless points
+/// do not claim infinite weight.
+fn modulation_err(p: &MtfPoint) -> f64 {
+    let e = (p.mtf_err * p.modulation / p.mtf.max(1e-12)).abs();
+    e.hypot(2e-4 * p.modulation.abs())
+}
+
+/// The near estimate: M0·(1 + b f + c f²) (or the even form) through the
+/// points within [`MAX_MOVE`] of the first ones, up to max(2 f_lo, f_lo + 0.05).
+fn near_estimate(pts: &[&MtfPoint], f_lo: f64) -> Result<ChartModulation, String> {
+    let sel = start_points(pts, f_lo, 0.05, MAX_MOVE, 5);
+    if sel.len() < 5 {
+        return Err("too few low-frequency points to extrapolate to zero frequency".into());
+    }
+    let f_top = sel.last().map(|p| p.freq_cy_px).unwrap_or(f_lo);
     let data: Vec<(f64, f64, f64)> = sel
         .iter()
-        .map(|p| {
-            let e = (p.mtf_err * p.modulation / p.mtf.max(1e-12)).abs();
-            // A floor so that noiseless points do not claim infinite weight.
-            let e = e.hypot(2e-4 * p.modulation.abs());
-            (p.freq_cy_px / f_top, p.modulation, e)
-        })
+        .map(|p| (p.freq_cy_px / f_top, p.modulation, modulation_err(p)))
         .collect();
     let linear = robust_fit(&data, |x| [1.0, x, x * x]).filter(|l| l.slope <= 0.0);
     let (fit, linear_start) = match linear {
@@ -198,6 +219,59 @@ pub fn extrapolate_chart_modulation(
     })
 }
 
+/// The wide estimate: ln M = ln M0 + b f + c f² + d f³ (or the even form)
+/// through the points within [`WIDE_MOVE`] of the first ones, up to
+/// max(2 f_lo, f_lo + 0.15) cy/px. A product of factors (lens, pixel,
+/// diffusion, sharpening) is a sum of logarithms, each smooth in f, so the
+/// cubic holds over a fall that bends a low-order polynomial in M itself:
+/// strong blur or diffusion, and the rise of sharpening. `None` with fewer
+/// than 7 points.
+fn log_estimate(pts: &[&MtfPoint], f_lo: f64) -> Option<ChartModulation> {
+    let pos: Vec<&MtfPoint> = pts.iter().copied().filter(|p| p.modulation > 0.0).collect();
+    if pos.first()?.freq_cy_px > f_lo {
+        return None;
+    }
+    let sel = start_points(&pos, f_lo, 0.15, WIDE_MOVE, 7);
+    if sel.len() < 7 {
+        return None;
+    }
+    let f_top = sel.last()?.freq_cy_px;
+    let data: Vec<(f64, f64, f64)> = sel
+        .iter()
+        .map(|p| {
+            (
+                p.freq_cy_px / f_top,
+                p.modulation.ln(),
+                modulation_err(p) / p.modulation,
+            )
+        })
+        .collect();
+    let (fit, linear_start) =
+        match robust_fit(&data, |x| [1.0, x, x * x, x * x * x]).filter(|l| l.slope <= 0.0) {
+            Some(l) => (l, true),
+            None => (
+                robust_fit(&data, |x| {
+                    let x2 = x * x;
+                    [1.0, x2, x2 * x2, x2 * x2 * x2]
+                })?,
+                false,
+            ),
+        };
+    let disp = (fit.chi2 / fit.dof.max(1.0)).max(1.0);
+    let value = fit.m0.exp();
+    let err = value * (fit.var * disp).sqrt();
+    (value > 0.0 && value.is_finite() && err.is_finite()).then_some(ChartModulation {
+        value,
+        err,
+        f_lo,
+        f_hi: f_top,
+        linear_start,
+    })
+}
+
+/// Largest relative move of the modulation over the points the wide estimate fits.
+const WIDE_MOVE: f64 = 0.3;
+
 /// Largest relative move of the modulation over the points the extrapolation fits.
 const MAX_MOVE: f64 = 0.1;
 
@@ -214,34 +288,37 @@ struct RobustFit {
 /// Iteratively reweighted least squares of y on the three basis functions of x,
 /// weights 1/e² times a Tukey biweight (c = 4.685) of the residuals over their
 /// robust scale.
-fn robust_fit(data: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<RobustFit> {
+fn robust_fit<const N: usize>(
+    data: &[(f64, f64, f64)],
+    basis: impl Fn(f64) -> [f64; N],
+) -> Option<RobustFit> {
     let mut tukey = vec![1.0f64; data.len()];
-    let mut coef = [0.0f64; 3];
+    let mut coef = [0.0f64; N];
     let mut cov00 = 0.0;
+    let unit: [f64; N] = std::array::from_fn(|i| if i == 0 { 1.0 } else { 0.0 });
+    let model =
+        |coef: &[f64; N], x: f64| -> f64 { basis(x).iter().zip(coef).map(|(b, c)| b * c).sum() };
     for iter in 0..20 {
-        let mut m = [[0.0f64; 3]; 3];
-        let mut r = [0.0f64; 3];
+        let mut m = [[0.0f64; N]; N];
+        let mut r = [0.0f64; N];
         for (k, &(x, y, e)) in data.iter().enumerate() {
             let w = tukey[k] / (e * e);
             let b = basis(x);
-            for i in 0..3 {
+            for i in 0..N {
                 r[i] += w * b[i] * y;
-                for j in 0..3 {
+                for j in 0..N {
                     m[i][j] += w * b[i] * b[j];
                 }
             }
         }
-        let new = solve3(m, r)?;
+        let new = solve_n(m, r)?;
         // Variance of the intercept: first column of the inverse.
-        cov00 = solve3(m, [1.0, 0.0, 0.0])?[0];
+        cov00 = solve_n(m, unit)?[0];
         let moved = (new[0] - coef[0]).abs();
         coef = new;
         let z: Vec<f64> = data
             .iter()
-            .map(|&(x, y, e)| {
-                let b = basis(x);
-                (y - (coef[0] * b[0] + coef[1] * b[1] + coef[2] * b[2])) / e
-            })
+            .map(|&(x, y, e)| (y - model(&coef, x)) / e)
             .collect();
         let mut abs: Vec<f64> = z.iter().map(|v| v.abs()).collect();
         abs.sort_by(f64::total_cmp);
@@ -263,8 +340,7 @@ fn robust_fit(data: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Opti
     let mut chi2 = 0.0;
     let mut wsum = 0.0;
     for (k, &(x, y, e)) in data.iter().enumerate() {
-        let b = basis(x);
-        let res = (y - (coef[0] * b[0] + coef[1] * b[1] + coef[2] * b[2])) / e;
+        let res = (y - model(&coef, x)) / e;
         chi2 += tukey[k] * res * res;
         wsum += tukey[k];
     }
@@ -273,30 +349,35 @@ fn robust_fit(data: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Opti
         slope: coef[1],
         var: cov00.max(0.0),
         chi2,
-        dof: (wsum - 3.0).max(1.0),
+        dof: (wsum - N as f64).max(1.0),
     })
 }
 
 /// Solves a 3×3 linear system by Gaussian elimination with partial pivoting.
-pub(crate) fn solve3(mut a: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
-    for col in 0..3 {
-        let piv = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+pub(crate) fn solve3(a: [[f64; 3]; 3], r: [f64; 3]) -> Option<[f64; 3]> {
+    solve_n(a, r)
+}
+
+/// Solves an N×N linear system by Gaussian elimination with partial pivoting.
+fn solve_n<const N: usize>(mut a: [[f64; N]; N], mut r: [f64; N]) -> Option<[f64; N]> {
+    for col in 0..N {
+        let piv = (col..N).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[piv][col].abs() < 1e-300 {
             return None;
         }
         a.swap(col, piv);
         r.swap(col, piv);
-        for row in 0..3 {
+        for row in 0..N {
             if row != col {
                 let f = a[row][col] / a[col][col];
-                for j in 0..3 {
+                for j in 0..N {
                     a[row][j] -= f * a[col][j];
                 }
                 r[row] -= f * r[col];
             }
         }
     }
-    Some([r[0] / a[0][0], r[1] / a[1][1], r[2] / a[2][2]])
+    Some(std::array::from_fn(|i| r[i] / a[i][i]))
 }
 
 #[cfg(test)]
@@ -381,17 +462,37 @@ mod tests {
     #[test]
     fn a_steeply_falling_curve_is_extrapolated_from_its_first_points_only() {
         // A blurry lens, Gaussian σ = 2 px: 17 % lost by 0.06 cy/px. A quadratic
-        // through 0.01–0.06 cy/px lands 1.2 % high at 0; through the points
-        // within 10 % of the first ones, 0.3 %.
+        // in M through 0.01–0.06 cy/px lands 1.2 % high at 0; through the points
+        // within 10 % of the first ones (the near estimate), 0.3 %. The log
+        // cubic of the wide estimate is exact for a Gaussian, and its smaller
+        // uncertainty makes it the one kept.
         let sigma: f64 = 2.0;
         let gauss = |f: f64| (-2.0 * std::f64::consts::PI.powi(2) * sigma * sigma * f * f).exp();
         let pts: Vec<MtfPoint> = curve(0.7, gauss)
             .into_iter()
             .filter(|p| p.freq_cy_px >= 0.01)
             .collect();
+        let refs: Vec<&MtfPoint> = pts.iter().collect();
+        let near = near_estimate(&refs, 0.01).unwrap();
+        assert!(near.f_hi < 0.04, "fitted up to {}", near.f_hi);
+        assert!((near.value / 0.7 - 1.0).abs() < 0.004, "{}", near.value);
         let a = extrapolate_chart_modulation(&pts, 0.0).unwrap();
-        assert!(a.f_hi < 0.04, "fitted up to {}", a.f_hi);
-        assert!((a.value / 0.7 - 1.0).abs() < 0.004, "{}", a.value);
+        assert!(a.err < near.err && a.f_hi > 0.04, "{a:?} vs {near:?}");
+        assert!((a.value / 0.7 - 1.0).abs() < 1e-4, "{}", a.value);
+    }
+
+    #[test]
+    fn a_sharpened_start_is_followed_over_its_rise() {
+        // Unsharp mask amount 0.8, σ 1.3 px on a Gaussian lens σ = 0.8 px: the
+        // curve rises 14 % by 0.1 cy/px. The wide estimate follows the rise
+        // (a sum of smooth logarithms); a quadratic in M through the first
+        // 0.05 cy/px misses its f⁴ term.
+        let k = 2.0 * std::f64::consts::PI.powi(2);
+        let usm =
+            |f: f64| (-k * 0.64 * f * f).exp() * (1.0 + 0.8 * (1.0 - (-k * 1.69 * f * f).exp()));
+        let a = extrapolate_chart_modulation(&curve(0.8, usm), 0.0).unwrap();
+        assert!((a.value / 0.8 - 1.0).abs() < 1e-3, "{a:?}");
+        assert!(!a.linear_start, "{a:?}");
     }
 
     #[test]
