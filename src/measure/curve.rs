@@ -100,18 +100,27 @@ pub struct ChartModulation {
 /// the (non-aliased) modulation curve to zero frequency.
 ///
 /// Only points at `s ≥ s_min` are used (the caller leaves out the periods
-/// next to the strip's end). The model follows the physics of a camera's MTF
+/// next to the strip's end). The models follow the physics of a camera's MTF
 /// near 0: every lens has a finite aperture, so its diffraction gives the
 /// curve a falling linear start, 1 − (4/π)·f/f_c for a circular pupil,
 /// whatever its aberrations (they, the pixel aperture, diffusion, defocus and
-/// sharpening are all even in f and start quadratically). So the points up to
-/// max(2 f_lo, f_lo + 0.05) cy/px are fitted with M0·(1 + b f + c f²) by
-/// iteratively reweighted least squares (Tukey biweight on residuals scaled
-/// by the points' own uncertainty and a robust scale, so one bad point cannot
-/// drag the fit). A rising start (b > 0) is not physical (|OTF| ≤ OTF(0) for
-/// any PSF whose rise is even): the even M0·(1 + b f² + c f⁴) is used then.
-/// Assuming an even start for a real lens (as before) put the chart
-/// modulation 1–4 % low (f/4–f/11 on 4.3 µm pixels).
+/// sharpening are all even in f and start quadratically). Two estimates are
+/// made, each by iteratively reweighted least squares (Tukey biweight on
+/// residuals scaled by the points' own uncertainty and a robust scale, so one
+/// bad point cannot drag the fit), and the one with the smaller uncertainty
+/// is kept, the two models' difference added to that uncertainty:
+/// - near: M0·(1 + b f + c f²) through the points up to max(2 f_lo, f_lo + 0.05)
+///   cy/px that stay within 10 % of the first ones;
+/// - wide: ln M = ln M0 + b f + c f² + d f³ through those up to
+///   max(2 f_lo, f_lo + 0.15) cy/px within 30 %: the MTF is a product of
+///   factors, so its logarithm is a sum of smooth terms, and the cubic
+///   follows the strong fall of blur and diffusion and the rise of sharpening
+///   that bend a low-order polynomial in M itself.
+///
+/// A rising start (b > 0) is not physical (|OTF| ≤ OTF(0) for any PSF whose
+/// rise is even): the even form (in f², f⁴, …) is used then. Assuming an even
+/// start for a real lens (as before session 10) put the chart modulation
+/// 1–4 % low (f/4–f/11 on 4.3 µm pixels).
 pub fn extrapolate_chart_modulation(
     points: &[MtfPoint],
     s_min: f64,
@@ -140,8 +149,12 @@ pub fn extrapolate_chart_modulation(
     }
     // Two estimates; the one with the smaller uncertainty is kept.
     let near = near_estimate(&pts, f_lo)?;
+    // The two models' disagreement is part of the kept one's uncertainty.
     Ok(match log_estimate(&pts, f_lo) {
-        Some(w) if w.err < near.err => w,
+        Some(w) if w.err < near.err => ChartModulation {
+            err: w.err.hypot(w.value - near.value),
+            ..w
+        },
         _ => near,
     })
 }
