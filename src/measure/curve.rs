@@ -108,7 +108,7 @@ pub struct ChartModulation {
 /// made, each by iteratively reweighted least squares (Tukey biweight on
 /// residuals scaled by the points' own uncertainty and a robust scale, so one
 /// bad point cannot drag the fit), and the one with the smaller uncertainty
-/// is kept, the two models' difference added to that uncertainty:
+/// is kept:
 /// - near: M0·(1 + b f + c f²) through the points up to max(2 f_lo, f_lo + 0.05)
 ///   cy/px that stay within 10 % of the first ones;
 /// - wide: ln M = ln M0 + b f + c f² + d f³ through those up to
@@ -149,12 +149,8 @@ pub fn extrapolate_chart_modulation(
     }
     // Two estimates; the one with the smaller uncertainty is kept.
     let near = near_estimate(&pts, f_lo)?;
-    // The two models' disagreement is part of the kept one's uncertainty.
     Ok(match log_estimate(&pts, f_lo) {
-        Some(w) if w.err < near.err => ChartModulation {
-            err: w.err.hypot(w.value - near.value),
-            ..w
-        },
+        Some(w) if w.err < near.err => w,
         _ => near,
     })
 }
