@@ -23,11 +23,11 @@ pub mod source;
 pub mod strip_ends;
 
 use crate::geometry::{Homography, Point};
-use crate::photo::Plane;
 use crate::target::Target;
 use thiserror::Error;
 
 pub use debug::debug_image;
+pub use sample::{AtImage, ConvertedCrop};
 pub use source::{Converted, Source};
 
 /// Why no chart (or no refined region) could be given.
@@ -155,7 +155,7 @@ pub fn find_chart<S: Source + ?Sized>(
 
 /// Runs the search and returns what was seen, even when nothing was found.
 ///
-/// `src` is a linear [`Plane`] or a photo converted on demand ([`Converted`]):
+/// `src` is a linear [`Plane`](crate::photo::Plane) or a photo converted on demand ([`Converted`]):
 /// the search reads a reduced image and full resolution only near the marks.
 pub fn search<S: Source + ?Sized>(src: &S, target: &Target) -> Result<Search, LocateError> {
     let nf = target.fiducials.len();
@@ -251,11 +251,11 @@ fn not_found(target: &Target, candidates: Vec<Candidate>) -> LocateError {
 /// turned along the printed bars ([`strip_ends`]; an error when the bars are not clearly seen).
 /// Errors (edges not clearly seen, ambiguous, or corners that would move further
 /// than `search_px` allows) leave the caller to use the corners as given.
-pub fn refine_roi(
-    plane: &Plane,
+pub fn refine_roi<S: AtImage + ?Sized>(
+    src: &S,
     corners: [Point; 4],
     target: Option<&Target>,
     search_px: f64,
 ) -> Result<[Point; 4], LocateError> {
-    refine::refine_roi(plane, corners, target, search_px)
+    refine::refine_roi(src, corners, target, search_px)
 }

@@ -4,6 +4,7 @@
 
 use crate::geometry::Point;
 use crate::photo::Plane;
+use crate::photo::linearise::Crop;
 use std::borrow::Cow;
 
 /// A grey raster (row-major) whose sample `(i, j)` covers grid square
@@ -63,27 +64,72 @@ impl<'a> Gray<'a> {
     /// Bilinear value at a grid point (sample centres at i + 0.5), `None` outside.
     #[inline]
     pub fn bilinear(&self, c: Point) -> Option<f64> {
-        let x = c[0] - 0.5;
-        let y = c[1] - 0.5;
-        if !(x >= 0.0 && y >= 0.0) {
-            return None;
-        }
-        let (i, j) = (x as usize, y as usize);
-        if i + 1 >= self.w || j + 1 >= self.h {
-            return None;
-        }
-        let (fx, fy) = (x - i as f64, y - j as f64);
-        let r0 = j * self.w + i;
-        let r1 = r0 + self.w;
         let d = &self.data;
-        let top = d[r0] as f64 * (1.0 - fx) + d[r0 + 1] as f64 * fx;
-        let bot = d[r1] as f64 * (1.0 - fx) + d[r1 + 1] as f64 * fx;
-        Some(top * (1.0 - fy) + bot * fy)
+        let w = self.w;
+        blend4(c, (self.w, self.h), |i, j| d[j * w + i])
     }
 
     /// Bilinear value at an image px position, `None` outside.
     pub fn at_img(&self, p: Point) -> Option<f64> {
         self.bilinear(self.to_grid(p))
+    }
+}
+
+/// The bilinear blend at grid point `c` of a `size` (w, h) grid whose sample
+/// (i, j) is `at(i, j)` (sample centres at i + 0.5), `None` outside.
+#[inline(always)]
+fn blend4(c: Point, (w, h): (usize, usize), at: impl Fn(usize, usize) -> f32) -> Option<f64> {
+    let x = c[0] - 0.5;
+    let y = c[1] - 0.5;
+    if !(x >= 0.0 && y >= 0.0) {
+        return None;
+    }
+    let (i, j) = (x as usize, y as usize);
+    if i + 1 >= w || j + 1 >= h {
+        return None;
+    }
+    let (fx, fy) = (x - i as f64, y - j as f64);
+    let top = at(i, j) as f64 * (1.0 - fx) + at(i + 1, j) as f64 * fx;
+    let bot = at(i, j + 1) as f64 * (1.0 - fx) + at(i + 1, j + 1) as f64 * fx;
+    Some(top * (1.0 - fy) + bot * fy)
+}
+
+/// Linear values at image positions, as the corner refinement reads them.
+pub trait AtImage: Sync {
+    /// Bilinear value at image px position `p` (pixel centres at +0.5), `None`
+    /// outside the samples held.
+    fn at_img(&self, p: Point) -> Option<f64>;
+}
+
+impl AtImage for Gray<'_> {
+    fn at_img(&self, p: Point) -> Option<f64> {
+        Gray::at_img(self, p)
+    }
+}
+
+impl AtImage for Plane {
+    fn at_img(&self, p: Point) -> Option<f64> {
+        Gray::of_plane(self).at_img(p)
+    }
+}
+
+/// A full-resolution crop of a photo read pixel by pixel, converted where read
+/// (`at(x, y)`: the linear value of image pixel (x, y)): the values and bounds
+/// of the crop's converted plane, without converting the crop (the corner
+/// refinement reads bands about the edges and a few lines along the strip).
+pub struct ConvertedCrop<F> {
+    /// The crop (image px).
+    pub crop: Crop,
+    /// Linear value of an image pixel.
+    pub at: F,
+}
+
+impl<F: Fn(usize, usize) -> f32 + Sync> AtImage for ConvertedCrop<F> {
+    fn at_img(&self, p: Point) -> Option<f64> {
+        let Crop { x0, y0, x1, y1 } = self.crop;
+        // As `Gray::of_plane` of the crop's plane: grid = image px − the crop's corner.
+        let c = [p[0] - x0 as f64, p[1] - y0 as f64];
+        blend4(c, (x1 - x0, y1 - y0), |i, j| (self.at)(x0 + i, y0 + j))
     }
 }
 

@@ -15,7 +15,7 @@ use crate::geometry::Point;
 use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
 use crate::photo::jpeg::JpegWant;
-use crate::photo::linearise::{Channel, Crop, plane_names, planes_within};
+use crate::photo::linearise::{Channel, plane_names, planes_within};
 use crate::target::Target;
 use std::path::Path;
 
@@ -231,15 +231,13 @@ fn balance_green_group(
 }
 
 /// The part of [`measure_decoded`] after the region is known: `roi` (image
-/// px), the refinement's luminance plane `seen` (reused when it holds what
-/// the measurement reads) and the warnings so far.
+/// px) and the warnings so far.
 pub(super) fn measure_decoded_at(
     dec: &Decoded,
     name: &str,
     target: Option<&Target>,
     opts: &MeasureOptions,
     roi: &[Point; 4],
-    seen: Option<(Crop, Plane)>,
     mut said: Said,
 ) -> Result<Measurement, MeasureError> {
     let err = |failure: Failure| MeasureError {
@@ -275,21 +273,10 @@ pub(super) fn measure_decoded_at(
         dec.height,
     )
     .map_err(err)?;
-    // The refinement's plane already holds these samples when the measurement
-    // wants default-tone luminance (or the photo is grey) inside its crop.
-    let same_samples = !opts.tone_chart
-        && opts.gamma.is_none()
-        && (opts.channel == Channel::Luma || dec.channels == 1);
-    let reuse = seen.filter(|(c, _)| {
-        same_samples && c.x0 <= crop.x0 && c.y0 <= crop.y0 && c.x1 >= crop.x1 && c.y1 >= crop.y1
-    });
-    let (ps, preview) = match reuse {
-        Some((_, plane)) => (vec![plane], make_preview(dec, &roi)),
-        None => rayon::join(
-            || planes_within(dec, crop, &tone, opts.channel, &span),
-            || make_preview(dec, &roi),
-        ),
-    };
+    let (ps, preview) = rayon::join(
+        || planes_within(dec, crop, &tone, opts.channel, &span),
+        || make_preview(dec, &roi),
+    );
     let names = plane_names(opts.channel, dec.channels);
     let groups: Vec<(&str, Vec<Plane>)> = names
         .into_iter()

@@ -72,13 +72,13 @@ pub(super) fn raw_read_window(roi: &[Point; 4]) -> Crop {
 
 /// The given corners refined to the edges seen in `plane`, or as given (with
 /// a warning saying why) when the edges are not clearly seen.
-pub(super) fn refine_or_keep(
-    plane: &Plane,
+pub(super) fn refine_or_keep<S: crate::locate::AtImage + ?Sized>(
+    src: &S,
     given: [Point; 4],
     target: Option<&Target>,
     said: &mut Said,
 ) -> [Point; 4] {
-    match crate::locate::refine_roi(plane, given, target, REFINE_SEARCH_PX) {
+    match crate::locate::refine_roi(src, given, target, REFINE_SEARCH_PX) {
         Ok(refined) => {
             let moved = given
                 .iter()

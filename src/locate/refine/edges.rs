@@ -1,7 +1,7 @@
 //! Edge points for the refinement: the target's straight segments and, along
 //! each, the image position of its strongest gradient of the right polarity.
 
-use super::super::sample::Gray;
+use super::super::sample::AtImage;
 use crate::geometry::{Homography, Point};
 use crate::target::Target;
 use rayon::prelude::*;
@@ -140,8 +140,8 @@ pub(super) fn pick_first(grad: &[f64], from_start: bool) -> Option<f64> {
 /// polarity when the target gives it (with `skip_ambiguous`, samples with a rival
 /// edge of that polarity in the window are skipped), else the first strong edge
 /// going outward from the inside.
-pub fn collect_edges(
-    g: &Gray<'_>,
+pub fn collect_edges<S: AtImage + ?Sized>(
+    g: &S,
     segments: &[Segment],
     h: &Homography,
     search_px: f64,

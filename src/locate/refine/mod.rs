@@ -13,9 +13,8 @@ mod edges;
 pub use edges::{EdgeObs, Segment, collect_edges, target_segments};
 
 use super::LocateError;
-use super::sample::Gray;
+use super::sample::{AtImage, Gray};
 use crate::geometry::{Homography, Point, check_quad, rect_corners};
-use crate::photo::Plane;
 use crate::target::Target;
 
 /// A target segment's line in the image under a homography.
@@ -334,15 +333,14 @@ fn keep_straight_trimmed(edges: Vec<EdgeObs>, min_pts: usize) -> Vec<EdgeObs> {
 }
 
 /// See [`super::refine_roi`].
-pub fn refine_roi(
-    plane: &Plane,
+pub fn refine_roi<S: AtImage + ?Sized>(
+    full: &S,
     corners: [Point; 4],
     target: Option<&Target>,
     search_px: f64,
 ) -> Result<[Point; 4], LocateError> {
     let fail = |m: String| Err(LocateError::Refine(m));
     check_quad(&corners).map_err(|e| LocateError::Refine(e.to_string()))?;
-    let full = Gray::of_plane(plane);
     let (src, segs) = match target {
         Some(t) => (
             rect_corners(0.0, 0.0, t.width_mm, t.height_mm),
@@ -369,7 +367,7 @@ pub fn refine_roi(
     let search = search_px.max(2.0) + 2.0;
     let mut seen_edges = Vec::new();
     for s in [search, 3.0, 2.0] {
-        let mut edges = prune(&h, collect_edges(&full, &segs, &h, s, true), s);
+        let mut edges = prune(&h, collect_edges(full, &segs, &h, s, true), s);
         if let Some(t) = target {
             edges = keep_straight(edges, 4);
             // Both directions of the target's edges must be seen to fix the homography.
@@ -431,7 +429,7 @@ pub fn refine_roi(
     let max_slant = 2.0 * search_px + 4.0;
     if target.is_none() {
         // The ends kept the user's (slanted) lines: turn them along the printed bars.
-        let fit = super::strip_ends::align_ends(&full, &h, max_slant)
+        let fit = super::strip_ends::align_ends(full, &h, max_slant)
             .map_err(|m| LocateError::Refine(format!("strip ends: {m}")))?;
         out = fit.corners;
     }

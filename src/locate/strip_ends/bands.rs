@@ -1,7 +1,7 @@
 //! The strip's bars sampled into bands of constant v and each window's
 //! residual slant, the measurement [`super::align_ends`] fits its slant line to.
 
-use super::super::sample::Gray;
+use super::super::sample::AtImage;
 use crate::geometry::Homography;
 use rayon::prelude::*;
 
@@ -66,8 +66,8 @@ pub(super) fn needed(h: &Homography, n: usize, windows: &[usize], range_px: f64)
 }
 
 /// Samples the bands where `keep` says (NaN elsewhere).
-pub(super) fn sample_bands(
-    g: &Gray<'_>,
+pub(super) fn sample_bands<S: AtImage + ?Sized>(
+    g: &S,
     h: &Homography,
     n: usize,
     lines: usize,
@@ -95,11 +95,11 @@ pub(super) fn sample_bands(
                     }
                     for (k, q) in grid[..accs.len()].iter_mut().enumerate() {
                         let u0 = (c * RUN + k) as f64 * du;
-                        *q = g.to_grid(h.apply([u0 + (v - 0.5) * s.at(u0), v]));
+                        *q = h.apply([u0 + (v - 0.5) * s.at(u0), v]);
                     }
                     for ((acc, &keep), &q) in accs.iter_mut().zip(keeps).zip(&grid) {
                         *acc = if keep {
-                            *acc + g.bilinear(q).unwrap_or(f64::NAN)
+                            *acc + g.at_img(q).unwrap_or(f64::NAN)
                         } else {
                             f64::NAN
                         };

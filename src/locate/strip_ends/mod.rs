@@ -21,6 +21,8 @@
 
 mod bands;
 
+use super::sample::AtImage;
+#[cfg(test)]
 use super::sample::Gray;
 use crate::geometry::{Homography, Point};
 use bands::*;
@@ -158,7 +160,11 @@ fn fit_line(ws: &[WinSlant]) -> Option<LineFit> {
 /// ends already inside the strip) and returns the corners whose end lines run
 /// along the bars through the current ends' centre points. `max_slant_px` bounds
 /// the correction at each end. `Err` says why the bars were not clearly seen.
-pub fn align_ends(g: &Gray<'_>, h: &Homography, max_slant_px: f64) -> Result<EndsFit, String> {
+pub fn align_ends<S: AtImage + ?Sized>(
+    g: &S,
+    h: &Homography,
+    max_slant_px: f64,
+) -> Result<EndsFit, String> {
     let dist = |p: Point, q: Point| (p[0] - q[0]).hypot(p[1] - q[1]);
     let len_px = dist(h.apply([0.0, 0.5]), h.apply([1.0, 0.5]));
     let wid_px = 0.5 * (dist(h.apply([0.0, 0.0]), h.apply([0.0, 1.0])))
