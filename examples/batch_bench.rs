@@ -5,7 +5,7 @@
 //! and compare wall time and peak RSS (see README, "Batch processing").
 //!
 //! ```sh
-//! cargo run --release --example batch_bench -- make DIR 16 4000x3000
+//! cargo run --release --features examples --example batch_bench -- make DIR 16 4000x3000
 //! /usr/bin/time -v target/release/examples/batch_bench run DIR OUT 1
 //! /usr/bin/time -v target/release/examples/batch_bench run DIR OUT 2
 //! ```

@@ -6,7 +6,7 @@
 //! simulator's truth curve).
 //!
 //! ```sh
-//! cargo run --release --example batch_demo -- demo_shots [WIDTHxHEIGHT] [COPIES]
+//! cargo run --release --features examples --example batch_demo -- demo_shots [WIDTHxHEIGHT] [COPIES]
 //! sweepmtf batch demo_shots -o demo_out --roi-file demo_shots/rois.csv
 //! ```
 

@@ -3,7 +3,7 @@
 //! the median of the per-pair wall-time ratios, printed as a table.
 //!
 //! ```sh
-//! cargo build --release && cargo run --release --example djpeg_ratio -- make DIR
+//! cargo build --release && cargo run --release --features examples --example djpeg_ratio -- make DIR
 //! target/release/examples/djpeg_ratio run DIR [PAIRS]
 //! ```
 //! `make` writes `wide.jpg` (a 5200×1700 px strip, ≈ 37 % of the frame, q92,

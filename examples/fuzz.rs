@@ -3,7 +3,7 @@
 //! library's entry points, every case guarded.
 //!
 //! ```text
-//! cargo run --release --example fuzz -- [--cases N] [--seed S] [--from K] [--log FILE]
+//! cargo run --release --features examples --example fuzz -- [--cases N] [--seed S] [--from K] [--log FILE]
 //! ```
 //!
 //! The cases run in a child process (this program re-run with `--child`),

@@ -1,7 +1,7 @@
 //! Interleaved timing of the 24 MP JPEG speed check (`cargo bench --bench
 //! measure`'s shot): decode only, then decode + measure, in turns, N rounds;
 //! prints each median and the median of the per-round ratios (robust on a
-//! machine whose speed drifts). `cargo run --release --example jpeg_ratio -- [N]`.
+//! machine whose speed drifts). `cargo run --release --features examples --example jpeg_ratio -- [N]`.
 
 use std::hint::black_box;
 use std::time::Instant;

@@ -11,7 +11,7 @@
 //! far the refined strip's ends are slanted from the printed bars; `--sweep 2`
 //! scores the low-contrast (0.2) sweep instead.
 //!
-//! Run: `cargo run --release --example locate_sweep [-- --shots 200 --seed 7
+//! Run: `cargo run --release --features examples --example locate_sweep [-- --shots 200 --seed 7
 //! --min-width 1000 --max-width 1600 --verbose --exact]`. Prints a line per shot
 //! that misses a bar (all with `--verbose`; `--exact` measures it again with the
 //! simulator's exact corners, to tell location's errors from measurement's), then the table: found rate, corner

@@ -1,9 +1,9 @@
 //! Peak memory and time of one raw measurement in a fresh process (criterion
 //! keeps every case in one process, so its peaks mix): run once per case on
-//! the 24 MP DNGs that `cargo bench --bench raw` keeps with
+//! the 24 MP DNGs that `cargo bench --manifest-path bench/Cargo.toml --bench raw` keeps with
 //! `SWEEPMTF_BENCH_DNG_DIR=folder`.
 //!
-//! `cargo run --release --example raw_memory -- FILE.dng MODE`, MODE one of
+//! `cargo run --release --features examples --example raw_memory -- FILE.dng MODE`, MODE one of
 //! `decode` (our decoder, whole frame), `rawler` (rawler's whole decode),
 //! `strip` (`--roi` on the demo target's sweep strip), `corners` (`--roi` =
 //! the target frame's corners, with the target) or `auto` (chart found from

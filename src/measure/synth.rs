@@ -312,7 +312,7 @@ pub fn standard_cases() -> Vec<SynthShot> {
     ]
 }
 
-/// The 24-megapixel shot of the speed check (benches/measure.rs, examples/accuracy.rs):
+/// The 24-megapixel shot of the speed check (bench/benches/measure.rs, examples/accuracy.rs):
 /// 6000×4000, a 5600×400 px log sweep 0.004→0.6 cy/px turned 3°, SNR ≈ 50, JPEG q90.
 pub fn big_shot() -> SynthShot {
     let base = standard_cases().remove(1);

@@ -52,8 +52,10 @@ fn factors(c: &mut Criterion) {
 }
 
 fn system(path: &str) -> System {
-    System::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/targets/systems/").to_string() + path)
-        .unwrap()
+    System::from_file(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../targets/systems/").to_string() + path,
+    )
+    .unwrap()
 }
 
 fn maps(c: &mut Criterion) {

@@ -2,7 +2,7 @@
 //! search on the reduced image, refine at full resolution. Bar: ≤ 200 ms.
 //! Run: `cargo bench --bench locate`.
 
-#[path = "../tests/it/locate_support/mod.rs"]
+#[path = "../../tests/it/locate_support/mod.rs"]
 mod locate_support;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -42,7 +42,7 @@ fn bench(c: &mut Criterion) {
     // The real photo of another chart design (no chart of ours in it): time to say so.
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/testdata/real/chart_photo/mtfmapper_perspective_chart_photo.jpg"
+        "/../testdata/real/chart_photo/mtfmapper_perspective_chart_photo.jpg"
     );
     let plane = load_linear_luma(path);
     c.bench_function("locate_realphoto_not_found", |b| {

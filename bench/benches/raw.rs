@@ -17,7 +17,7 @@
 //!    windowed reader's (`decode_raw`). The files are deleted at the end unless
 //!    `SWEEPMTF_BENCH_DNG_DIR` names a folder to keep them in. Peak RSS of
 //!    a whole `measure` run is measured separately with `/usr/bin/time -v`
-//!    (README, "Camera raw and EXIF") or `--example raw_memory`, since
+//!    (README, "Camera raw and EXIF") or the `raw_memory` example, since
 //!    criterion keeps every case in one process.
 //!
 //! Run: `cargo bench --bench raw` (`-- 24mp` for the big file only).
@@ -36,7 +36,7 @@ use sweepmtf::simulate::{self, BayerOrder, Camera};
 use sweepmtf::target::SweepLaw;
 
 fn dng() -> PathBuf {
-    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/testdata/real"))
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../testdata/real"))
         .join("raw/tinydng_colorchart_canon550d_magiclantern.dng")
 }
 
