@@ -48,12 +48,21 @@ pub(super) fn decode_bytes_with_pitch(
     name: &str,
     opts: &MeasureOptions,
 ) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
-    let dec = decode_bytes_want(bytes, name, jpeg_want(opts)).map_err(|e| MeasureError {
+    // The EXIF and the scan check read the bytes on the second core while
+    // the decoder (one core) runs.
+    let (dec, (facts, damage)) = rayon::join(
+        || decode_bytes_want(bytes, name, jpeg_want(opts)),
+        || {
+            (
+                crate::photo::exif::facts_from_bytes(bytes),
+                crate::photo::jpeg_check::scan_damage(bytes),
+            )
+        },
+    );
+    let dec = dec.map_err(|e| MeasureError {
         path: name.to_string(),
         failure: e.into(),
     })?;
-    let facts = crate::photo::exif::facts_from_bytes(bytes);
-    let damage = crate::photo::jpeg_check::scan_damage(bytes);
     let pitch = crate::photo::pitch::resolve(&facts, dec.width, dec.height, opts.pixel_pitch_mm);
     let o = MeasureOptions {
         pixel_pitch_mm: pitch.pitch_mm,
