@@ -179,6 +179,9 @@ fn png_bytes(
 ) -> Result<Vec<u8>, SimError> {
     let mut out = Vec::new();
     let mut enc = png::Encoder::new(&mut out, w, h);
+    // Fast deflate, as for every picture the crate writes: a simulated shot
+    // is written once and read by a measurement; size matters less than time.
+    enc.set_compression(png::Compression::Fast);
     enc.set_color(colour);
     let eight = camera.stored_bits() == 8;
     enc.set_depth(if eight {
