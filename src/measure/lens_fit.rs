@@ -514,27 +514,13 @@ fn follow(
     let mut lens = start;
     let mut result: Option<DistortionFound> = None;
     for _ in 0..3 {
+        // Each long edge searched from its own side, the two side by side.
+        let side = |ab: (Point, Point), other: (Point, Point)| {
+            edge_points(plane, ab, other, depth, lens.as_ref(), usize::MAX)
+        };
         let ((e0, n0), (e1, n1)) = rayon::join(
-            || {
-                edge_points(
-                    plane,
-                    (roi[0], roi[1]),
-                    (roi[3], roi[2]),
-                    depth,
-                    lens.as_ref(),
-                    usize::MAX,
-                )
-            },
-            || {
-                edge_points(
-                    plane,
-                    (roi[3], roi[2]),
-                    (roi[0], roi[1]),
-                    depth,
-                    lens.as_ref(),
-                    usize::MAX,
-                )
-            },
+            || side((roi[0], roi[1]), (roi[3], roi[2])),
+            || side((roi[3], roi[2]), (roi[0], roi[1])),
         );
         let Some(found) = fit_edges(
             [e0, e1],
