@@ -1,13 +1,17 @@
 //! The parallel runner: measures planned shots on `jobs` worker threads that
 //! take the next shot from a shared counter. Each worker holds one shot at a
 //! time and the job decodes its own file, so at most `jobs` decoded images
-//! are alive at once (no queue of decoded images). The workers are plain
-//! threads, not rayon workers, on purpose: a decoder that parallelises
-//! inside (rawler does, with rayon) then runs on rayon's global pool, and a
-//! worker waiting for it cannot steal and start a further shot, as a worker
-//! of a rayon pool would. A panic inside a job is caught and becomes that
-//! shot's error row; every other shot is still measured. Complete shots from
-//! an earlier run are skipped (see [`super::resume`]).
+//! are alive at once (no queue of decoded images).
+//!
+//! The run uses `jobs` threads in all. Each worker measures inside its own
+//! rayon pool of [`in_shot_threads`] threads, itself included: one thread
+//! when there are at least `jobs` shots, so two shots never compete for a
+//! core with each other's inner work, and a decoder that parallelises inside
+//! (rawler does, with rayon) runs on its worker's pool, never on a pool
+//! shared with another worker (a worker waiting there could not start a
+//! further shot). A panic inside a job is caught and becomes that shot's
+//! error row; every other shot is still measured. Complete shots from an
+//! earlier run are skipped (see [`super::resume`]).
 
 use super::progress::Progress;
 use super::record::{FailKind, ShotFailure, ShotRecord, ShotResult, Status};
@@ -144,6 +148,7 @@ pub fn run_shots(
     let finished = AtomicUsize::new(0);
     let to_run = todo.len();
     let workers = opts.jobs.max(1).min(to_run.max(1));
+    let threads = in_shot_threads(opts.jobs, workers);
     let done: Vec<(usize, ShotRecord)> = std::thread::scope(|scope| {
         let handles: Vec<_> = (0..workers)
             .map(|w| {
@@ -152,13 +157,21 @@ pub fn run_shots(
                     .name(format!("{WORKER_THREAD_PREFIX}{w}"))
                     .spawn_scoped(scope, move || {
                         let mut mine = Vec::new();
-                        loop {
+                        let mut work = || loop {
                             let t = next.fetch_add(1, Ordering::SeqCst);
                             let Some((i, hash)) = todo.get(t) else { break };
                             let rec = run_one(&shots[*i], shots_dir, job, hash);
                             let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
                             progress.shot_done(&rec, n, to_run);
                             mine.push((*i, rec));
+                        };
+                        // The worker's own pool: a measurement's inner
+                        // parallelism stays on this worker's share of the
+                        // `jobs` threads. Without it the pool cannot be made,
+                        // and the shots use the global pool as before.
+                        match worker_pool(threads) {
+                            Some(pool) => pool.install(work),
+                            None => work(),
                         }
                         mine
                     })
@@ -188,6 +201,26 @@ pub fn run_shots(
         measured: to_run,
         skipped,
     })
+}
+
+/// Threads each of `workers` workers may use inside one shot so that the
+/// run uses `jobs` threads in all: with as many shots at once as cores, each
+/// shot is measured on one thread (no two shots' inner work competing for a
+/// core); with fewer shots than `jobs`, the spare threads help inside them.
+pub fn in_shot_threads(jobs: usize, workers: usize) -> usize {
+    (jobs.max(1) / workers.max(1)).max(1)
+}
+
+/// A pool of `threads` threads that includes the calling worker thread
+/// (so a one-thread pool runs everything on the worker itself); `None` if
+/// the system refuses the threads.
+fn worker_pool(threads: usize) -> Option<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .use_current_thread()
+        .thread_name(|i| format!("{WORKER_THREAD_PREFIX}inner-{i}"))
+        .build()
+        .ok()
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
@@ -276,4 +309,64 @@ fn run_one(shot: &PlannedShot, shots_dir: &Path, job: &dyn ShotJob, hash: &str) 
         );
     }
     rec
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::batch::progress::NoProgress;
+
+    #[test]
+    fn jobs_are_shared_between_workers_and_their_shots() {
+        assert_eq!(in_shot_threads(1, 1), 1);
+        assert_eq!(in_shot_threads(2, 2), 1);
+        assert_eq!(in_shot_threads(2, 1), 2);
+        assert_eq!(in_shot_threads(8, 3), 2);
+        assert_eq!(in_shot_threads(0, 0), 1);
+    }
+
+    /// Each shot records how many threads its inner parallel work may use
+    /// (as its MTF50, which nothing reads here).
+    fn threads_seen(n_shots: usize, jobs: usize) -> Vec<usize> {
+        let dir = tempfile::tempdir().unwrap();
+        let shots: Vec<PlannedShot> = (0..n_shots)
+            .map(|i| {
+                let source = dir.path().join(format!("s{i}.jpg"));
+                std::fs::write(&source, b"x").unwrap();
+                PlannedShot {
+                    index: i,
+                    source,
+                    file: format!("s{i}.jpg"),
+                    stem: format!("s{i}"),
+                }
+            })
+            .collect();
+        let job = FnJob {
+            fingerprint: "t".into(),
+            f: |_: &Path, _: &Path, _: &str| {
+                let n = rayon::join(rayon::current_num_threads, || 0).0;
+                Ok(ShotResult {
+                    mtf50_cy_px: Some(n as f64),
+                    ..ShotResult::default()
+                })
+            },
+        };
+        let opts = RunOptions {
+            jobs,
+            force: true,
+            retry_failed: false,
+        };
+        let out = run_shots(&shots, &dir.path().join("shots"), &job, &opts, &NoProgress).unwrap();
+        out.records
+            .iter()
+            .map(|r| r.result.mtf50_cy_px.unwrap_or_else(|| panic!("{r:?}")) as usize)
+            .collect()
+    }
+
+    #[test]
+    fn a_full_run_measures_each_shot_on_one_thread_and_a_short_one_shares_the_spare() {
+        assert_eq!(threads_seen(5, 2), vec![1; 5]);
+        assert_eq!(threads_seen(3, 1), vec![1; 3]);
+        assert_eq!(threads_seen(1, 2), vec![2]);
+    }
 }
