@@ -45,7 +45,7 @@ pub enum Lattice {
 impl Lattice {
     /// The lattice of a group of planes: a quincunx for two (2, 2) planes
     /// whose offsets differ by (1, 1), else the first plane's steps.
-    pub fn of(planes: &[&crate::photo::Plane]) -> Lattice {
+    pub fn of(planes: &[crate::photo::PlaneRef]) -> Lattice {
         match planes {
             [a, b]
                 if a.step == (2, 2)
@@ -405,12 +405,18 @@ mod tests {
         };
         let (gr, gb) = (plane((1, 0), (2, 2)), plane((0, 1), (2, 2)));
         let (r, b) = (plane((0, 0), (2, 2)), plane((1, 1), (2, 2)));
-        assert_eq!(Lattice::of(&[&gr, &gb]), Lattice::Quincunx);
-        assert_eq!(Lattice::of(&[&r, &b]), Lattice::Quincunx);
-        assert_eq!(Lattice::of(&[&r, &gr]), Lattice::Rect(2, 2));
-        assert_eq!(Lattice::of(&[&r]), Lattice::Rect(2, 2));
+        assert_eq!(
+            Lattice::of(&[(&gr).into(), (&gb).into()]),
+            Lattice::Quincunx
+        );
+        assert_eq!(Lattice::of(&[(&r).into(), (&b).into()]), Lattice::Quincunx);
+        assert_eq!(
+            Lattice::of(&[(&r).into(), (&gr).into()]),
+            Lattice::Rect(2, 2)
+        );
+        assert_eq!(Lattice::of(&[(&r).into()]), Lattice::Rect(2, 2));
         let full = plane((0, 0), (1, 1));
-        assert_eq!(Lattice::of(&[&full]), Lattice::Rect(1, 1));
+        assert_eq!(Lattice::of(&[(&full).into()]), Lattice::Rect(1, 1));
         // Band edges: along the axes 0.5 cy/px, on the diagonal |f| = 0.5/√2.
         let q = Lattice::Quincunx;
         let d = std::f64::consts::FRAC_PI_4;

@@ -12,10 +12,10 @@ use super::{
     resolve_distortion,
 };
 use crate::geometry::Point;
-use crate::photo::Plane;
 use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
 use crate::photo::jpeg::JpegWant;
-use crate::photo::linearise::{Channel, plane_names, planes_within};
+use crate::photo::linearise::{Channel, coded, plane_names, planes_within};
+use crate::photo::{Plane, PlaneRef};
 use crate::target::Target;
 use std::path::Path;
 
@@ -185,7 +185,7 @@ pub(super) fn measure_frame_at(
         ..opts.clone()
     };
     let mut m = measure_planes_lens(
-        &groups,
+        &super::plane_views(&groups),
         (frame.width, frame.height),
         &roi,
         target,
@@ -272,7 +272,9 @@ pub(super) fn measure_decoded_at(
     })
     .map_err(err)?;
     let lens = distortion.and_then(|d| d.lens(dec.width, dec.height));
-    // Convert only what binning reads.
+    // Integer codes are binned in place through the tone's table (no
+    // converted copy: on a 24 MP strip that was 35 MB); float codes are
+    // converted where binning reads.
     let (crop, span) = read_set(
         &roi,
         target,
@@ -282,14 +284,22 @@ pub(super) fn measure_decoded_at(
         dec.height,
     )
     .map_err(err)?;
-    let (ps, preview) = rayon::join(
-        || planes_within(dec, crop, &tone, opts.channel, &span),
+    let coded = coded(dec, &tone, opts.channel);
+    let (converted, preview) = rayon::join(
+        || match coded {
+            Some(_) => Vec::new(),
+            None => planes_within(dec, crop, &tone, opts.channel, &span),
+        },
         || make_preview(dec, &roi),
     );
+    let views = match &coded {
+        Some(c) => c.planes(dec),
+        None => converted.iter().map(PlaneRef::from).collect(),
+    };
     let names = plane_names(opts.channel, dec.channels);
-    let groups: Vec<(&str, Vec<Plane>)> = names
+    let groups: Vec<(&str, Vec<PlaneRef>)> = names
         .into_iter()
-        .zip(ps.into_iter().map(|p| vec![p]))
+        .zip(views.into_iter().map(|p| vec![p]))
         .collect();
     let mut m = measure_planes_lens(
         &groups,

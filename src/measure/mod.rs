@@ -13,9 +13,9 @@
 use crate::distortion::Lens;
 use crate::geometry::Point;
 use crate::locate::{ConvertedCrop, sample::Gray};
-use crate::photo::Plane;
 use crate::photo::decode::{Decoded, decode_file};
 use crate::photo::linearise::{Channel, file_tone, pixel_converter};
+use crate::photo::{Plane, PlaneRef};
 use crate::target::Target;
 use std::path::Path;
 
@@ -300,7 +300,16 @@ pub fn measure_planes(
     clip_level: f32,
 ) -> Result<Measurement, Failure> {
     let distortion = given_distortion(opts, roi, size.0, size.1)?;
-    measure_planes_lens(groups, size, roi, target, opts, clip_level, distortion)
+    let views = plane_views(groups);
+    measure_planes_lens(&views, size, roi, target, opts, clip_level, distortion)
+}
+
+/// Groups of planes as groups of views ([`PlaneRef`]).
+fn plane_views<'a>(groups: &'a [(&'a str, Vec<Plane>)]) -> Vec<(&'a str, Vec<PlaneRef<'a>>)> {
+    groups
+        .iter()
+        .map(|(name, planes)| (*name, planes.iter().map(PlaneRef::from).collect()))
+        .collect()
 }
 
 /// The distortion the user gave, checked against the image size (exit 2 with the allowed range).
@@ -359,7 +368,7 @@ fn resolve_distortion<'a>(
 
 /// [`measure_planes`] with the distortion already resolved.
 fn measure_planes_lens(
-    groups: &[(&str, Vec<Plane>)],
+    groups: &[(&str, Vec<PlaneRef>)],
     size: (usize, usize),
     roi: &[Point; 4],
     target: Option<&Target>,
@@ -383,22 +392,14 @@ fn measure_planes_lens(
         clip_level,
     };
     for (name, group) in groups {
-        let plane_refs: Vec<&Plane> = group.iter().collect();
+        let plane_refs: &[PlaneRef] = group;
         if plane_refs.is_empty() {
             continue;
         }
         for (id, strip, tlaw, contrast) in &specs {
             let measured = |seed: Option<PhaseLaw>| {
                 measure_strip(
-                    &plane_refs,
-                    name,
-                    id,
-                    strip,
-                    *tlaw,
-                    seed,
-                    *contrast,
-                    opts,
-                    &bin_opts,
+                    plane_refs, name, id, strip, *tlaw, seed, *contrast, opts, &bin_opts,
                 )
             };
             // A channel whose own crossings cannot be followed (red or blue
@@ -441,13 +442,7 @@ fn measure_planes_lens(
             && !t.patches.is_empty()
         {
             let h = target_homography(t, roi)?;
-            patch_rows.extend(patches::measure_patches(
-                &plane_refs,
-                name,
-                &h,
-                t,
-                &bin_opts,
-            ));
+            patch_rows.extend(patches::measure_patches(plane_refs, name, &h, t, &bin_opts));
         }
     }
     if curves.is_empty() && patch_rows.is_empty() {

@@ -11,7 +11,7 @@ use super::law::{LawKind, PhaseLaw};
 use super::profile::{BinOptions, bin_planes};
 use super::rect_strip;
 use crate::geometry::Homography;
-use crate::photo::Plane;
+use crate::photo::PlaneRef;
 use crate::target::Target;
 use serde::Serialize;
 
@@ -43,7 +43,7 @@ pub struct PatchResult {
 
 /// Measures every sine patch of the target in one plane; patches that cannot be measured are skipped.
 pub fn measure_patches(
-    planes: &[&Plane],
+    planes: &[PlaneRef],
     channel: &str,
     h: &Homography,
     t: &Target,

@@ -178,7 +178,7 @@ pub(super) fn resolve_roi(
 }
 
 /// The bounding box of `q` padded by `pad` px, clamped to the `w`×`h` image.
-pub(super) fn bbox_crop(q: &[Point; 4], w: usize, h: usize, pad: f64) -> Crop {
+pub(super) fn bbox_crop(q: &[Point], w: usize, h: usize, pad: f64) -> Crop {
     let xmin = q.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min) - pad;
     let xmax = q.iter().map(|p| p[0]).fold(f64::NEG_INFINITY, f64::max) + pad;
     let ymin = q.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min) - pad;
@@ -267,39 +267,46 @@ pub(super) fn target_strip_quads(t: &Target, roi: &[Point; 4]) -> Result<Vec<[Po
         .collect())
 }
 
-/// The image quadrilaterals binning reads: each strip and sine patch inside
-/// its long-edge margins.
-fn binned_quads(
+/// The photo outlines binning reads (closed polygons, image px): each strip
+/// and sine patch inside its long-edge margins; a strip seen through a lens
+/// as its curved outline, densely sampled.
+fn binned_outlines(
     roi: &[Point; 4],
     target: Option<&Target>,
     margin: f64,
     lens: Option<&Lens>,
-) -> Result<(Vec<[Point; 4]>, f64), Failure> {
+) -> Result<Vec<Vec<Point>>, Failure> {
     let m = margin.clamp(0.0, 0.45);
-    let inner = |st: &Strip| st.image_quad(m * st.width, (1.0 - m) * st.width);
-    let specs = strips(roi, target, lens)?;
-    // How far the distorted regions bow out of their corner quads.
-    let bow = specs
+    let outline = |st: &Strip| {
+        let (a, b) = (m * st.width, (1.0 - m) * st.width);
+        match st.lens {
+            Some(_) => profile::photo_outline(st, a, b),
+            None => st.image_quad(a, b).to_vec(),
+        }
+    };
+    let mut outlines: Vec<Vec<Point>> = strips(roi, target, lens)?
         .iter()
-        .map(|sp| sp.1.bow_px(m * sp.1.width, (1.0 - m) * sp.1.width))
-        .fold(0.0, f64::max);
-    let mut quads: Vec<[Point; 4]> = specs.iter().map(|sp| inner(&sp.1)).collect();
+        .map(|sp| outline(&sp.1))
+        .collect();
     if let Some(t) = target
         && !t.patches.is_empty()
     {
         let h = target_homography(t, roi)?;
-        quads.extend(
+        outlines.extend(
             t.patches
                 .iter()
-                .map(|p| inner(&rect_strip(&h, &p.rect, p.direction))),
+                .map(|p| outline(&rect_strip(&h, &p.rect, p.direction))),
         );
     }
-    Ok((quads, bow))
+    Ok(outlines)
 }
 
 /// What a measurement reads: the crop around the binned regions, and for each
 /// image row y the columns [a, b) to convert (the regions' span over y ± 2 px,
-/// widened by 2 px, 3 on the right).
+/// widened by 2 px, 3 on the right). Under a lens the span follows the
+/// regions' curved outlines (before, it widened the straight corner quads by
+/// their bow, which missed parts of a strongly distorted strip: at −19.5 %
+/// barrel 7 % of the samples read as unconverted zeros, refused as clipped).
 #[allow(clippy::type_complexity)]
 pub(super) fn read_set(
     roi: &[Point; 4],
@@ -309,11 +316,10 @@ pub(super) fn read_set(
     width: usize,
     height: usize,
 ) -> Result<(Crop, impl Fn(usize) -> (usize, usize) + Sync), Failure> {
-    let (quads, bow) = binned_quads(roi, target, margin, lens)?;
-    let bow = if bow > 0.0 { bow.ceil() + 1.0 } else { 0.0 };
-    let crop = quads
+    let outlines = binned_outlines(roi, target, margin, lens)?;
+    let crop = outlines
         .iter()
-        .map(|q| bbox_crop(q, width, height, 3.0 + bow))
+        .map(|q| bbox_crop(q, width, height, 3.0))
         .reduce(|a, b| Crop {
             x0: a.x0.min(b.x0),
             y0: a.y0.min(b.y0),
@@ -325,9 +331,9 @@ pub(super) fn read_set(
         let yc = y as f64 + 0.5;
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
-        for q in &quads {
-            for dy in [-2.0 - bow, 0.0, 2.0 + bow] {
-                if let Some((a, b)) = profile::row_span(q, yc + dy) {
+        for q in &outlines {
+            for dy in [-2.0, 0.0, 2.0] {
+                if let Some((a, b)) = profile::outline_span(q, yc + dy) {
                     lo = lo.min(a);
                     hi = hi.max(b);
                 }
@@ -336,10 +342,7 @@ pub(super) fn read_set(
         if lo > hi {
             (0, 0)
         } else {
-            (
-                (lo - 2.0 - bow).max(0.0) as usize,
-                (hi + 3.0 + bow).max(0.0) as usize,
-            )
+            ((lo - 2.0).max(0.0) as usize, (hi + 3.0).max(0.0) as usize)
         }
     };
     Ok((crop, span))
@@ -398,5 +401,50 @@ fn target_law(sw: &Sweep) -> PhaseLaw {
             c1: sw.f_min_cy_mm,
             c2: (sw.f_max_cy_mm / sw.f_min_cy_mm).ln() / l,
         },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::distortion::Ptlens;
+
+    /// Every sample binning reads through a strong lens lies inside the read
+    /// set's span of its row (else it would read an unconverted zero).
+    #[test]
+    fn read_set_covers_a_strongly_distorted_strip() {
+        let (w, h) = (1200, 800);
+        let roi = [
+            [145.0, 644.0],
+            [1067.0, 641.0],
+            [1052.0, 708.0],
+            [159.0, 712.0],
+        ];
+        for b in [-0.0867, 0.0867] {
+            let lens = Lens::new(Ptlens { a: 0.0, b, c: 0.0 }, w, h);
+            let margin = 0.1;
+            let (crop, span) = read_set(&roi, None, margin, Some(&lens), w, h).unwrap();
+            let specs = strips(&roi, None, Some(&lens)).unwrap();
+            let st = &specs[0].1;
+            let (t0, t1) = (margin * st.width, (1.0 - margin) * st.width);
+            for i in 0..=400 {
+                for k in 0..=8 {
+                    let p = st.to_photo([
+                        st.length * i as f64 / 400.0,
+                        t0 + (t1 - t0) * k as f64 / 8.0,
+                    ]);
+                    if p[0] < 0.0 || p[1] < 0.0 || p[0] >= w as f64 || p[1] >= h as f64 {
+                        continue;
+                    }
+                    let (x, y) = (p[0] as usize, p[1] as usize);
+                    assert!(y >= crop.y0 && y < crop.y1 && x >= crop.x0 && x < crop.x1);
+                    let (a, bx) = span(y);
+                    assert!(
+                        a < x && x + 2 <= bx,
+                        "b {b}: ({x}, {y}) outside [{a}, {bx})"
+                    );
+                }
+            }
+        }
     }
 }

@@ -11,7 +11,7 @@ use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
 use super::{curve, law_guess, normalise};
 use crate::geometry::Point;
-use crate::photo::Plane;
+use crate::photo::PlaneRef;
 use rayon::prelude::*;
 
 /// Refuse when more than this fraction of the region is clipped.
@@ -22,7 +22,7 @@ const CLIP_REFUSE: f64 = 0.02;
 /// found from this plane's own crossings.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn measure_strip(
-    planes: &[&Plane],
+    planes: &[PlaneRef],
     channel: &str,
     id: &str,
     strip: &Strip,

@@ -11,6 +11,7 @@
 
 use super::Plane;
 use super::decode::{Decoded, Samples};
+use super::plane_ref::{Codes, PlaneData, PlaneRef};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -265,6 +266,66 @@ pub fn planes_within(
         .collect()
 }
 
+/// What reading a photo's integer codes in place needs ([`coded`]): the
+/// tone's table and the channel mixes of [`planes`].
+#[derive(Debug, Clone)]
+pub struct CodedTone {
+    lut: Vec<f32>,
+    mixes: Vec<Vec<(usize, f32)>>,
+}
+
+/// The table and mixes to read `dec`'s codes in place as the planes
+/// [`planes`] gives for `channel` (same values, bit for bit); `None` for
+/// floating-point codes, which go through the tone itself.
+pub fn coded(dec: &Decoded, tone: &Tone, channel: Channel) -> Option<CodedTone> {
+    match dec.samples {
+        Samples::F32(_) => None,
+        _ => Some(CodedTone {
+            lut: code_lut(dec, tone),
+            mixes: mixes(channel, dec.channels),
+        }),
+    }
+}
+
+impl CodedTone {
+    /// The whole decoded picture (its first [`Decoded::rows`] rows) as
+    /// views, one per name of [`plane_names`]; none for floating-point codes.
+    pub fn planes<'a>(&'a self, dec: &'a Decoded) -> Vec<PlaneRef<'a>> {
+        let n = dec.width * dec.rows * dec.channels;
+        let codes = |mix| match &dec.samples {
+            Samples::U8(v) => Some(PlaneData::Codes8(self.codes(&v[..n], dec.channels, mix))),
+            Samples::U16(v) => Some(PlaneData::Codes16(self.codes(&v[..n], dec.channels, mix))),
+            Samples::F32(_) => None,
+        };
+        self.mixes
+            .iter()
+            .filter_map(|mix| {
+                Some(PlaneRef {
+                    width: dec.width,
+                    height: dec.rows,
+                    step: (1, 1),
+                    offset: (0, 0),
+                    data: codes(mix)?,
+                })
+            })
+            .collect()
+    }
+
+    fn codes<'a, T>(
+        &'a self,
+        codes: &'a [T],
+        channels: usize,
+        mix: &'a [(usize, f32)],
+    ) -> Codes<'a, T> {
+        Codes {
+            codes,
+            channels,
+            mix,
+            lut: &self.lut,
+        }
+    }
+}
+
 /// The linear value of every integer code of `dec` under `tone` (integer
 /// codes go through this table; float codes through the tone itself: empty).
 fn code_lut(dec: &Decoded, tone: &Tone) -> Vec<f32> {
@@ -353,7 +414,7 @@ fn mixed(mix: &[(usize, f32)], lin: impl Fn(usize) -> f32) -> f32 {
 
 /// Converts one row of interleaved codes to a weighted sum of linear channels.
 #[inline]
-fn convert_row<T: Copy + Into<usize>>(
+pub(crate) fn convert_row<T: Copy + Into<usize>>(
     out: &mut [f32],
     codes: &[T],
     nc: usize,

@@ -10,8 +10,11 @@ pub mod jpeg;
 pub mod jpeg_check;
 pub mod linearise;
 pub mod pitch;
+pub mod plane_ref;
 pub mod raw;
 pub mod transfer;
+
+pub use plane_ref::{PlaneData, PlaneRef};
 
 /// One channel of linear-light samples on a regular lattice of image pixel sites.
 ///

@@ -284,9 +284,8 @@ fn zero_distortion_changes_nothing() {
 /// The strongest distortion a lens may be given with (±19.5 % at the
 /// corner, the edges bowed 37–49 px off their chords): given, the bars hold;
 /// with defaults, the estimate (searched about a ladder of models when the
-/// chords miss the edges) finds b and the bars hold too. The barrel case is
-/// shot with a smaller chart: in the bottom geometry its strip clips (7 % of
-/// the samples), which is refused as clipped (exit 5) either way.
+/// chords miss the edges) finds b and the bars hold too, for the barrel case
+/// both with a smaller chart and in the bottom geometry.
 #[test]
 fn strongest_allowed_distortion() {
     let smaller = Geometry {
@@ -316,8 +315,11 @@ fn strongest_allowed_distortion() {
     }
     let b = b_for(-19.5, 1200.0, 800.0);
     let (shot, bytes) = shoot(BOTTOM, Some(Ptlens { a: 0.0, b, c: 0.0 }), 51);
-    let e = try_measure(&shot, &bytes, MeasureOptions::default()).unwrap_err();
-    assert!(e.to_string().contains("clipped"), "{e}");
+    // Measured within the bars: before session 12 a read-set bug left 7 % of
+    // this strip's samples unconverted (zeros), refused as clipped.
+    let m = measure(&shot, &bytes, MeasureOptions::default());
+    assert_eq!(m.curves[0].clipped_fraction, 0.0);
+    check_default_bars("-19.5 % estimated, bottom", &score(&shot, &m));
 }
 
 /// A strip through the image centre: its edges are almost radial, so they

@@ -5,7 +5,7 @@ use super::acc::BinAcc;
 use super::{Profile, Strip};
 use crate::distortion::Lens;
 use crate::geometry::Point;
-use crate::photo::Plane;
+use crate::photo::PlaneRef;
 use rayon::prelude::*;
 
 /// Binning through a lens model (the photo's iso-phase lines are curves):
@@ -16,7 +16,7 @@ use rayon::prelude::*;
 /// on threads).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn bin_through_lens(
-    planes: &[&Plane],
+    planes: &[PlaneRef],
     strip: &Strip,
     lens: &Lens,
     m: [f64; 9],
@@ -25,22 +25,7 @@ pub(super) fn bin_through_lens(
     nbins: usize,
     clip_level: f32,
 ) -> Profile {
-    // The region's outline in the photo, densely sampled (its edges are curves).
-    let l = strip.length;
-    let mut outline = Vec::new();
-    let n_long = 128;
-    for i in 0..n_long {
-        outline.push(strip.to_photo([l * i as f64 / n_long as f64, t0]));
-    }
-    for i in 0..8 {
-        outline.push(strip.to_photo([l, t0 + (t1 - t0) * i as f64 / 8.0]));
-    }
-    for i in 0..n_long {
-        outline.push(strip.to_photo([l * (1.0 - i as f64 / n_long as f64), t1]));
-    }
-    for i in 0..8 {
-        outline.push(strip.to_photo([0.0, t1 - (t1 - t0) * i as f64 / 8.0]));
-    }
+    let outline = photo_outline(strip, t0, t1);
     let ymin = outline.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min) - 1.0;
     let ymax = outline
         .iter()
@@ -71,8 +56,9 @@ pub(super) fn bin_through_lens(
             };
             let i0 = (((xa - 1.5 - ox) / sx).floor().max(0.0) as usize).min(plane.width);
             let i1 = (((xb + 1.5 - ox) / sx).ceil().max(0.0) as usize + 1).min(plane.width);
-            let row = &plane.data[j * plane.width..(j + 1) * plane.width];
-            for i in i0..i1 {
+            let mut buf = vec![0.0f32; i1.saturating_sub(i0)];
+            let row = plane.values(j, i0, &mut buf);
+            for (i, &v) in (i0..i1).zip(row) {
                 let x = ox + i as f64 * sx;
                 let [xu, yu] = lens.undistort([x, y]);
                 let w = m[6] * xu + m[7] * yu + m[8];
@@ -82,7 +68,7 @@ pub(super) fn bin_through_lens(
                 let s = (m[0] * xu + m[1] * yu + m[2]) / w;
                 let t = (m[3] * xu + m[4] * yu + m[5]) / w;
                 if t >= t0 && t <= t1 && s >= s_lo && s <= s_hi {
-                    out.push((((s * inv_bin) as usize).min(last) as u32, s, row[i]));
+                    out.push((((s * inv_bin) as usize).min(last) as u32, s, v));
                 }
             }
             out
@@ -108,8 +94,29 @@ pub(super) fn bin_through_lens(
     prof
 }
 
+/// The outline in the photo of the strip's part between t0 and t1, densely
+/// sampled (under a lens its edges are curves): a closed polygon, image px.
+pub(crate) fn photo_outline(strip: &Strip, t0: f64, t1: f64) -> Vec<Point> {
+    let l = strip.length;
+    let mut outline = Vec::new();
+    let n_long = 128;
+    for i in 0..n_long {
+        outline.push(strip.to_photo([l * i as f64 / n_long as f64, t0]));
+    }
+    for i in 0..8 {
+        outline.push(strip.to_photo([l, t0 + (t1 - t0) * i as f64 / 8.0]));
+    }
+    for i in 0..n_long {
+        outline.push(strip.to_photo([l * (1.0 - i as f64 / n_long as f64), t1]));
+    }
+    for i in 0..8 {
+        outline.push(strip.to_photo([0.0, t1 - (t1 - t0) * i as f64 / 8.0]));
+    }
+    outline
+}
+
 /// The x-extent where the horizontal line at `y` crosses a closed polygon.
-fn outline_span(poly: &[Point], y: f64) -> Option<(f64, f64)> {
+pub(crate) fn outline_span(poly: &[Point], y: f64) -> Option<(f64, f64)> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for k in 0..poly.len() {
         let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);

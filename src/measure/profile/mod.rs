@@ -14,8 +14,9 @@ mod region;
 
 use crate::distortion::Lens;
 use crate::geometry::{Homography, Point};
-use crate::photo::Plane;
+use crate::photo::{Plane, PlaneRef};
 use acc::{BinAcc, EXTREMES};
+pub(crate) use lens::{outline_span, photo_outline};
 use rayon::prelude::*;
 use region::Region;
 pub use region::row_span;
@@ -172,12 +173,12 @@ impl Profile {
 
 /// Bins one plane along a strip. Returns an empty profile when no sample falls inside.
 pub fn bin_plane(plane: &Plane, strip: &Strip, opts: &BinOptions) -> Profile {
-    bin_planes(&[plane], strip, opts)
+    bin_planes(&[plane.into()], strip, opts)
 }
 
 /// Bins several planes of one colour (e.g. the two green sites of a Bayer
 /// mosaic) together along a strip.
-pub fn bin_planes(planes: &[&Plane], strip: &Strip, opts: &BinOptions) -> Profile {
+pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Profile {
     let Some(inv) = strip.to_image.inverse() else {
         return Profile::default();
     };

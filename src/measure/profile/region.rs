@@ -2,12 +2,12 @@
 //! in cache-sized tiles (the fast path of binning).
 
 use crate::geometry::Point;
-use crate::photo::Plane;
+use crate::photo::PlaneRef;
 
 /// The sampled region of a strip, for visiting its samples.
 #[derive(Clone, Copy)]
 pub(super) struct Region<'a> {
-    pub(super) planes: &'a [&'a Plane],
+    pub(super) planes: &'a [PlaneRef<'a>],
     /// Image → strip homography, scaled so its denominator is positive in the region.
     pub(super) m: [f64; 9],
     pub(super) ymin: f64,
@@ -113,11 +113,10 @@ impl Region<'_> {
                     let (xa, xb) = (xa.min(xb), xa.max(xb));
                     let ia = (((xa - ox) / sx).floor() - 1.0).max(i0 as f64) as usize;
                     let ib = (((xb - ox) / sx).ceil() + 2.0).min(i1 as f64) as usize;
-                    let row = &plane.data[j * plane.width..(j + 1) * plane.width];
                     for i in ia.max(i0)..ib.min(i1) {
                         let s = s_of(i);
                         if bin_of(s) == b {
-                            f(b, s, row[i]);
+                            f(b, s, plane.at(i, j));
                         }
                     }
                 }
@@ -181,7 +180,8 @@ impl Region<'_> {
                 }
                 let j = band.first + dj;
                 let y = oy + j as f64 * sy;
-                let row = &plane.data[j * plane.width + i0..j * plane.width + i1];
+                let mut v_buf = [0.0f32; TILE];
+                let row = plane.values(j, i0, &mut v_buf[..i1 - i0]);
                 // Along a row the homography's numerator and denominator are
                 // linear in x. The positions are computed first, a run of at
                 // most TILE at a time (a loop the compiler vectorises), then
