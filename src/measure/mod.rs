@@ -62,11 +62,15 @@ use frame::{
     decode_bytes_with_pitch, decode_with_pitch, measure_decoded_at, measure_frame_at, read_photo,
 };
 use profile::BinOptions;
+use rayon::prelude::*;
 use region::{
-    bbox_crop, found_said, full_grey, grey_source, locate_region, location_failed, raw_read_window,
-    refine_or_keep, resolve_roi, strips,
+    StripSpec, bbox_crop, found_said, full_grey, grey_source, locate_region, location_failed,
+    raw_read_window, refine_or_keep, resolve_roi, strips,
 };
 use strip::measure_strip;
+/// A strip's curve and the note of how it was measured, if any.
+type NotedCurve = (Curve, Option<String>);
+
 /// Decodes a photo and measures it.
 pub fn measure_file(path: &Path, opts: &MeasureOptions) -> Result<Measurement, MeasureError> {
     let name = path.display().to_string();
@@ -396,7 +400,9 @@ fn measure_planes_lens(
         if plane_refs.is_empty() {
             continue;
         }
-        for (id, strip, tlaw, contrast) in &specs {
+        // The strips (a target has several) and the patches are measured
+        // side by side; the results are taken in the target's order.
+        let one = |(id, strip, tlaw, contrast): &StripSpec| {
             let measured = |seed: Option<PhaseLaw>| {
                 measure_strip(
                     plane_refs, name, id, strip, *tlaw, seed, *contrast, opts, &bin_opts,
@@ -409,41 +415,48 @@ fn measure_planes_lens(
                 .iter()
                 .find(|c: &&Curve| c.sweep_id == *id)
                 .map(|c| (c.channel.clone(), c.law));
-            let c = match (measured(None), earlier) {
-                (Ok(c), _) => c,
+            match (measured(None), earlier) {
+                (Ok(c), _) => Ok((c, None)),
                 (
                     Err(e @ (Failure::NoOscillation(_) | Failure::ModulationUnknown(_))),
                     Some((by, law)),
                 ) if tlaw.is_none() => {
                     let why = e.to_string();
                     let c = measured(Some(law)).map_err(|_| e)?;
-                    notes.push(format!(
+                    let note = format!(
                         "{name}/{id}: measured along {by}'s sweep law (its own failed: {why})"
-                    ));
-                    c
+                    );
+                    Ok((c, Some(note)))
                 }
-                (Err(e), _) => return Err(e),
-            };
+                (Err(e), _) => Err(e),
+            }
+        };
+        let patches = || match target {
+            Some(t) if !t.patches.is_empty() => target_homography(t, roi)
+                .map(|h| patches::measure_patches(plane_refs, name, &h, t, &bin_opts)),
+            _ => Ok(Vec::new()),
+        };
+        let (measured, patched): (Vec<Result<NotedCurve, Failure>>, _) =
+            rayon::join(|| specs.par_iter().map(one).collect(), patches);
+        for r in measured {
+            let (c, note) = r?;
+            notes.extend(note);
             if c.clipped_fraction > 0.0 {
                 warnings.push(format!(
-                    "{name}/{id}: {:.2} % of the region's samples are clipped",
+                    "{name}/{}: {:.2} % of the region's samples are clipped",
+                    c.sweep_id,
                     100.0 * c.clipped_fraction
                 ));
             }
             if c.chart_modulation_source.starts_with("extrapolated") {
                 warnings.push(format!(
-                    "{name}/{id}: chart modulation {:.4} {}",
-                    c.chart_modulation, c.chart_modulation_source
+                    "{name}/{}: chart modulation {:.4} {}",
+                    c.sweep_id, c.chart_modulation, c.chart_modulation_source
                 ));
             }
             curves.push(c);
         }
-        if let Some(t) = target
-            && !t.patches.is_empty()
-        {
-            let h = target_homography(t, roi)?;
-            patch_rows.extend(patches::measure_patches(plane_refs, name, &h, t, &bin_opts));
-        }
+        patch_rows.extend(patched?);
     }
     if curves.is_empty() && patch_rows.is_empty() {
         return Err(Failure::Options(
