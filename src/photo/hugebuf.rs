@@ -34,6 +34,48 @@ fn advise<T>(v: &[T]) {
 #[cfg(not(target_os = "linux"))]
 fn advise<T>(_: &[T]) {}
 
+/// The address range of a buffer, for [`populate`] while the buffer itself is
+/// lent to a writer.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Span {
+    start: usize,
+    bytes: usize,
+}
+
+/// The address range of `v`.
+pub(crate) fn span_of<T>(v: &[T]) -> Span {
+    Span {
+        start: v.as_ptr() as usize,
+        bytes: std::mem::size_of_val(v),
+    }
+}
+
+/// Faults in (zeroed) the pages of a fresh buffer ahead of its writer, on
+/// another core: the kernel's zeroing then leaves the writer's path. The
+/// contents are not touched (zero stays zero), so the writer may run at the
+/// same time. Linux 5.14 and later; elsewhere, or if refused, nothing happens.
+#[cfg(target_os = "linux")]
+pub(crate) fn populate(span: Span) {
+    const PAGE: usize = 4096;
+    let start = span.start.next_multiple_of(PAGE);
+    let end = (span.start + span.bytes) / PAGE * PAGE;
+    if end > start {
+        // SAFETY: the range lies inside one live allocation (the caller keeps
+        // the buffer alive across this call); MADV_POPULATE_WRITE only makes
+        // its pages present, never changes what they hold.
+        unsafe {
+            libc::madvise(
+                start as *mut libc::c_void,
+                end - start,
+                libc::MADV_POPULATE_WRITE,
+            );
+        }
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+pub(crate) fn populate(_: Span) {}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -177,7 +177,12 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
     let opts = options(true).jpeg_set_out_colorspace(out_space);
     d.set_options(opts);
     let mut warnings = Vec::new();
-    if let Err(strict) = d.decode_into(&mut buf[..width * decoded * channels]) {
+    let span = super::hugebuf::span_of(&buf[..width * decoded * channels]);
+    let (strict, ()) = rayon::join(
+        || d.decode_into(&mut buf[..width * decoded * channels]),
+        || super::hugebuf::populate(span),
+    );
+    if let Err(strict) = strict {
         if is_unsupported(&strict) {
             return Err(unsupported(strict.to_string()));
         }
