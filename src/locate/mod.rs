@@ -14,6 +14,7 @@
 
 pub mod assign;
 pub mod blobs;
+pub mod coded;
 pub mod debug;
 pub mod downscale;
 pub mod ellipse;
@@ -26,6 +27,7 @@ use crate::geometry::{Homography, Point};
 use crate::target::Target;
 use thiserror::Error;
 
+pub use coded::{Coded, of_decoded};
 pub use debug::debug_image;
 pub use sample::{AtImage, ConvertedCrop};
 pub use source::{Converted, Source};
