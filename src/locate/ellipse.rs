@@ -14,6 +14,7 @@ use super::{Candidate, Located};
 use crate::geometry::{Homography, Point, rect_corners};
 use crate::photo::linearise::Crop;
 use crate::target::Target;
+use rayon::prelude::*;
 
 /// Rays used for the full-resolution edge fit.
 pub const RAYS: usize = 64;
@@ -493,9 +494,15 @@ pub fn finish<S: Source + ?Sized>(
 ) -> Option<Located> {
     let mut warnings = Vec::new();
     let mut marks: Vec<(usize, Point)> = Vec::new();
-    for (&ci, &fi) in pick.cand_idx.iter().zip(&pick.fid_idx) {
+    // The marks are refined independently (in parallel), then taken in order.
+    let fits: Vec<Option<Ellipse>> = pick
+        .cand_idx
+        .par_iter()
+        .map(|&ci| refine_in_window(src, cands[ci].centre_px, cands[ci].cov_px2))
+        .collect();
+    for ((&ci, &fi), fit) in pick.cand_idx.iter().zip(&pick.fid_idx).zip(fits) {
         let c = &cands[ci];
-        match refine_in_window(src, c.centre_px, c.cov_px2) {
+        match fit {
             Some(e) => marks.push((fi, e.centre)),
             None => {
                 warnings.push(format!(
