@@ -81,16 +81,20 @@ fn dark_mask_white(g: &Gray<'_>) -> Vec<bool> {
     let b = (r / 4).max(1);
     let (bw, bh) = (w.div_ceil(b), h.div_ceil(b));
     let mut blocks = vec![f32::NEG_INFINITY; bw * bh];
-    for j in 0..h {
-        let row = &g.data[j * w..(j + 1) * w];
-        let brow = &mut blocks[(j / b) * bw..(j / b + 1) * bw];
-        for (i, &v) in row.iter().enumerate() {
-            let m = &mut brow[i / b];
-            if v > *m {
-                *m = v;
+    blocks
+        .par_chunks_mut(bw)
+        .zip(g.data[..w * h].par_chunks(b * w))
+        .for_each(|(brow, rows)| {
+            for row in rows.chunks(w) {
+                for (m, cols) in brow.iter_mut().zip(row.chunks(b)) {
+                    for &v in cols {
+                        if v > *m {
+                            *m = v;
+                        }
+                    }
+                }
             }
-        }
-    }
+        });
     let rb = r.div_ceil(b);
     let mut rows = Vec::with_capacity(bw * bh);
     for j in 0..bh {
@@ -110,8 +114,11 @@ fn dark_mask_white(g: &Gray<'_>) -> Vec<bool> {
     mask.par_chunks_mut(w).enumerate().for_each(|(j, m)| {
         let wrow = &white[(j / b) * bw..(j / b + 1) * bw];
         let row = &g.data[j * w..(j + 1) * w];
-        for (i, (mv, &v)) in m.iter_mut().zip(row).enumerate() {
-            *mv = v < 0.5 * wrow[i / b];
+        for ((ms, vs), &white) in m.chunks_mut(b).zip(row.chunks(b)).zip(wrow) {
+            let thr = 0.5 * white;
+            for (mv, &v) in ms.iter_mut().zip(vs) {
+                *mv = v < thr;
+            }
         }
     });
     mask
@@ -214,12 +221,24 @@ fn dark_mask(g: &Gray<'_>) -> Vec<bool> {
     let (w, h) = (g.w, g.h);
     let r = ((0.07 * w.min(h) as f64).round() as usize).clamp(4, 200);
     // Integral image, (w+1)×(h+1).
+    // Each row's running sums (in parallel), then the rows above added
+    // (the same sums: `above + run` either way round).
     let mut ii = vec![0.0f64; (w + 1) * (h + 1)];
-    for j in 0..h {
-        let mut run = 0.0f64;
-        for i in 0..w {
-            run += g.data[j * w + i] as f64;
-            ii[(j + 1) * (w + 1) + i + 1] = ii[j * (w + 1) + i + 1] + run;
+    ii[w + 1..]
+        .par_chunks_mut(w + 1)
+        .zip(g.data[..w * h].par_chunks(w))
+        .for_each(|(out, row)| {
+            let mut run = 0.0f64;
+            for (o, &v) in out[1..].iter_mut().zip(row) {
+                run += v as f64;
+                *o = run;
+            }
+        });
+    for j in 1..h {
+        let (above, here) = ii.split_at_mut((j + 1) * (w + 1));
+        let above = &above[j * (w + 1)..];
+        for (o, &a) in here[..w + 1].iter_mut().zip(above) {
+            *o += a;
         }
     }
     let mut mask = vec![false; w * h];
