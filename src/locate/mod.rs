@@ -18,6 +18,7 @@ pub mod coded;
 pub mod debug;
 pub mod downscale;
 pub mod ellipse;
+mod masks;
 pub mod refine;
 pub mod sample;
 pub mod source;
