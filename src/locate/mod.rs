@@ -15,6 +15,7 @@
 pub mod assign;
 pub mod blobs;
 pub mod coded;
+pub mod conic;
 pub mod debug;
 pub mod downscale;
 pub mod ellipse;
