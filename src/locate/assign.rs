@@ -11,6 +11,7 @@ use super::Candidate;
 use super::sample::Gray;
 use crate::geometry::{Homography, Point};
 use crate::target::{FiducialKind, Target};
+use rayon::prelude::*;
 
 /// Most disk-like candidates considered (by contrast).
 pub const MAX_CANDIDATES: usize = 30;
@@ -420,8 +421,9 @@ impl Pattern {
             }
         }
         let max_eps = 0.25 * target.width_mm.min(target.height_mm);
+        // Each point's flat radius on its own (in parallel, kept in order).
         let pts = pts
-            .into_iter()
+            .into_par_iter()
             .map(|p| {
                 let e = target.reflectance(p[0], p[1]);
                 let mut flat = 0.0;

@@ -7,6 +7,7 @@
 //! result is kept as a [`Candidate`] for the debug picture.
 
 use super::Candidate;
+use super::masks;
 use super::sample::Gray;
 use crate::geometry::Point;
 use rayon::prelude::*;
@@ -38,14 +39,14 @@ pub fn find_candidates(g: &Gray<'_>) -> Vec<Candidate> {
     let ((mut out, white), coarse) = rayon::join(
         || {
             rayon::join(
-                || find_candidates_one(g, &dark_mask(g)),
-                || find_candidates_one(g, &dark_mask_white(g)),
+                || find_candidates_one(g, &masks::dark_mask(g)),
+                || find_candidates_one(g, &masks::dark_mask_white(g)),
             )
         },
         || {
             (g.w.min(g.h) >= 200).then(|| {
                 let coarse = super::downscale::box_reduce(g, 2);
-                find_candidates_one(&coarse, &dark_mask(&coarse))
+                find_candidates_one(&coarse, &masks::dark_mask(&coarse))
             })
         },
     );
@@ -70,85 +71,6 @@ fn merge(out: &mut Vec<Candidate>, more: Vec<Candidate>) {
             out.push(c);
         }
     }
-}
-
-/// Dark mask: value < 0.5 × the local white level (maximum over a window of side ≈ 7 %
-/// of the short side, taken on a grid of b×b block maxima); keeps thin dark rings whole
-/// where the mean is pulled down by a dark neighbourhood.
-fn dark_mask_white(g: &Gray<'_>) -> Vec<bool> {
-    let (w, h) = (g.w, g.h);
-    let r = ((0.035 * w.min(h) as f64).round() as usize).clamp(3, 100);
-    let b = (r / 4).max(1);
-    let (bw, bh) = (w.div_ceil(b), h.div_ceil(b));
-    let mut blocks = vec![f32::NEG_INFINITY; bw * bh];
-    for j in 0..h {
-        let row = &g.data[j * w..(j + 1) * w];
-        let brow = &mut blocks[(j / b) * bw..(j / b + 1) * bw];
-        for (i, &v) in row.iter().enumerate() {
-            let m = &mut brow[i / b];
-            if v > *m {
-                *m = v;
-            }
-        }
-    }
-    let rb = r.div_ceil(b);
-    let mut rows = Vec::with_capacity(bw * bh);
-    for j in 0..bh {
-        rows.extend(sliding_max(&blocks[j * bw..(j + 1) * bw], rb));
-    }
-    let mut white = vec![0.0f32; bw * bh];
-    let mut col = vec![0.0f32; bh];
-    for i in 0..bw {
-        for j in 0..bh {
-            col[j] = rows[j * bw + i];
-        }
-        for (j, v) in sliding_max(&col, rb).into_iter().enumerate() {
-            white[j * bw + i] = v;
-        }
-    }
-    let mut mask = vec![false; w * h];
-    mask.par_chunks_mut(w).enumerate().for_each(|(j, m)| {
-        let wrow = &white[(j / b) * bw..(j / b + 1) * bw];
-        let row = &g.data[j * w..(j + 1) * w];
-        for (i, (mv, &v)) in m.iter_mut().zip(row).enumerate() {
-            *mv = v < 0.5 * wrow[i / b];
-        }
-    });
-    mask
-}
-
-/// Maximum over [i−r, i+r] (clamped), van Herk / Gil–Werman.
-fn sliding_max(x: &[f32], r: usize) -> Vec<f32> {
-    let n = x.len();
-    let k = 2 * r + 1;
-    let mut fwd = vec![f32::NEG_INFINITY; n];
-    let mut bwd = vec![f32::NEG_INFINITY; n];
-    for i in 0..n {
-        fwd[i] = if i % k == 0 {
-            x[i]
-        } else {
-            fwd[i - 1].max(x[i])
-        };
-    }
-    for i in (0..n).rev() {
-        bwd[i] = if i % k == k - 1 || i == n - 1 {
-            x[i]
-        } else {
-            bwd[i + 1].max(x[i])
-        };
-    }
-    (0..n)
-        .map(|i| {
-            let lo = i.saturating_sub(r);
-            let hi = (i + r).min(n - 1);
-            if lo / k == hi / k {
-                // One block (a window clipped at an end): direct.
-                x[lo..=hi].iter().cloned().fold(f32::NEG_INFINITY, f32::max)
-            } else {
-                bwd[lo].max(fwd[hi])
-            }
-        })
-        .collect()
 }
 
 /// A fiducial sits alone on its white square (side two diameters): a disk-like blob with
@@ -207,35 +129,6 @@ fn find_candidates_one(g: &Gray<'_>, dark: &[bool]) -> Vec<Candidate> {
         .filter(|c| c.n >= MIN_AREA && (c.n as f64) <= max_area && !c.touches_border)
         .filter_map(|c| test_blob(g, c))
         .collect()
-}
-
-/// Dark mask: value < DARK_FRACTION × box mean over a window of side ≈ 15 % of the short side.
-fn dark_mask(g: &Gray<'_>) -> Vec<bool> {
-    let (w, h) = (g.w, g.h);
-    let r = ((0.07 * w.min(h) as f64).round() as usize).clamp(4, 200);
-    // Integral image, (w+1)×(h+1).
-    let mut ii = vec![0.0f64; (w + 1) * (h + 1)];
-    for j in 0..h {
-        let mut run = 0.0f64;
-        for i in 0..w {
-            run += g.data[j * w + i] as f64;
-            ii[(j + 1) * (w + 1) + i + 1] = ii[j * (w + 1) + i + 1] + run;
-        }
-    }
-    let mut mask = vec![false; w * h];
-    mask.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
-        let y0 = j.saturating_sub(r);
-        let y1 = (j + r + 1).min(h);
-        for (i, m) in row.iter_mut().enumerate() {
-            let x0 = i.saturating_sub(r);
-            let x1 = (i + r + 1).min(w);
-            let s = ii[y1 * (w + 1) + x1] - ii[y0 * (w + 1) + x1] - ii[y1 * (w + 1) + x0]
-                + ii[y0 * (w + 1) + x0];
-            let mean = s / ((x1 - x0) * (y1 - y0)) as f64;
-            *m = (g.data[j * w + i] as f64) < DARK_FRACTION as f64 * mean;
-        }
-    });
-    mask
 }
 
 /// 8-connected components of the mask, in the order of their first pixel
@@ -581,20 +474,6 @@ mod tests {
                 let got = components(&mask, w, h);
                 let want = components_flood(&mask, w, h);
                 assert_eq!(got, want, "{w}×{h} at {p} %");
-            }
-        }
-    }
-
-    #[test]
-    fn sliding_max_matches_brute_force() {
-        let x: Vec<f32> = (0..57).map(|i| ((i * 37) % 23) as f32).collect();
-        for r in [0, 1, 3, 10, 60] {
-            let got = sliding_max(&x, r);
-            for (i, &g) in got.iter().enumerate() {
-                let lo = i.saturating_sub(r);
-                let hi = (i + r).min(x.len() - 1);
-                let want = x[lo..=hi].iter().cloned().fold(f32::NEG_INFINITY, f32::max);
-                assert_eq!(g, want, "r {r} i {i}");
             }
         }
     }

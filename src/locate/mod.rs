@@ -14,9 +14,12 @@
 
 pub mod assign;
 pub mod blobs;
+pub mod coded;
+pub mod conic;
 pub mod debug;
 pub mod downscale;
 pub mod ellipse;
+mod masks;
 pub mod refine;
 pub mod sample;
 pub mod source;
@@ -26,6 +29,7 @@ use crate::geometry::{Homography, Point};
 use crate::target::Target;
 use thiserror::Error;
 
+pub use coded::{Coded, of_decoded};
 pub use debug::debug_image;
 pub use sample::{AtImage, ConvertedCrop};
 pub use source::{Converted, Source};
@@ -166,12 +170,10 @@ pub fn search<S: Source + ?Sized>(src: &S, target: &Target) -> Result<Search, Lo
     if w < 16 || h < 16 || !src.complete() {
         return Err(LocateError::TooSmall(w, h));
     }
-    let small = src.reduced();
-    // The blobs and the target's pattern do not depend on each other.
-    let (mut candidates, pattern) = rayon::join(
-        || blobs::find_candidates(&small),
-        || assign::Pattern::new(target),
-    );
+    // The target's pattern does not depend on the image: made while the
+    // image is reduced (memory-bound) rather than beside the blob search.
+    let (small, pattern) = rayon::join(|| src.reduced(), || assign::Pattern::new(target));
+    let mut candidates = blobs::find_candidates(&small);
     let picks = assign::choose(&small, target, &pattern, &candidates);
     let mut charts = Vec::new();
     for pick in picks {

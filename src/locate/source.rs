@@ -84,7 +84,7 @@ pub struct Converted<F> {
 }
 
 /// Reduced rows made per parallel task.
-const BAND: usize = 8;
+pub(super) const BAND: usize = 8;
 
 impl<F: Fn(usize, usize, &mut [f32]) + Sync> Source for Converted<F> {
     fn size(&self) -> (usize, usize) {
@@ -111,9 +111,7 @@ impl<F: Fn(usize, usize, &mut [f32]) + Sync> Source for Converted<F> {
                     acc.iter_mut().for_each(|a| *a = 0.0);
                     for r in 0..k {
                         (self.convert)(j * k + r, 0, &mut line);
-                        for (a, chunk) in acc.iter_mut().zip(line.chunks_exact(k)) {
-                            *a += chunk.iter().sum::<f32>();
-                        }
+                        super::downscale::add_box_sums(&mut acc, &line, k);
                     }
                     for (o, a) in row.iter_mut().zip(&acc) {
                         *o = a * inv;

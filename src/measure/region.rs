@@ -130,15 +130,8 @@ pub(super) fn full_grey(dec: &Decoded) -> Vec<Plane> {
 
 /// The photo as the chart search reads it: linear luminance (the file's tone, the
 /// same values as [`full_grey`]), converted only where the search looks.
-pub(super) fn grey_source(
-    dec: &Decoded,
-) -> crate::locate::Converted<impl Fn(usize, usize, &mut [f32]) + Sync + '_> {
-    let tone = file_tone(dec).0;
-    crate::locate::Converted {
-        width: dec.width,
-        height: dec.height,
-        convert: crate::photo::linearise::row_converter(dec, &tone, Channel::Luma),
-    }
+pub(super) fn grey_source(dec: &Decoded) -> impl crate::locate::Source + '_ {
+    crate::locate::of_decoded(dec, &file_tone(dec).0, Channel::Luma)
 }
 
 /// Every copy of `target` in a decoded photo (left to right), found from its

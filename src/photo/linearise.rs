@@ -457,6 +457,23 @@ fn convert_row_f32(out: &mut [f32], codes: &[f32], nc: usize, mix: &[(usize, f32
     }
 }
 
+/// A code → linear table and the channel weights `(channel, weight)` of a plane ([`code_table`]).
+pub type CodeTable = (Vec<f32>, Vec<(usize, f32)>);
+
+/// The table and channel weights behind [`row_converter`] for integer codes
+/// (`None` for floating-point samples): a pixel's linear value is
+/// `table[code[c]]` for one weight `(c, _)`, or `w0·table[code[c0]] +
+/// w1·table[code[c1]] + w2·table[code[c2]]` (summed in that order) for three.
+pub fn code_table(dec: &Decoded, tone: &Tone, channel: Channel) -> Option<CodeTable> {
+    match dec.samples {
+        Samples::F32(_) => None,
+        _ => Some((
+            code_lut(dec, tone),
+            mixes(channel, dec.channels).swap_remove(0),
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
