@@ -72,7 +72,7 @@ where
 /// How to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RunOptions {
-    /// Worker threads (≥ 1).
+    /// Threads in all (≥ 1): worker threads, and the threads they share inside shots.
     pub jobs: usize,
     /// Redo every shot, complete or not.
     pub force: bool,

@@ -23,7 +23,8 @@ pub struct Args {
     /// Search sub-folders too.
     #[arg(short = 'r', long)]
     pub recursive: bool,
-    /// Shots measured at once (default: number of cores).
+    /// Threads in all (default: number of cores): up to N shots at once, each on
+    /// ⌊N / shots at once⌋ threads.
     #[arg(short = 'j', long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub jobs: Option<u32>,
     /// Measure only share K of N of the sorted file list (1 ≤ K ≤ N), for job arrays.
