@@ -12,6 +12,7 @@ pub mod chart;
 pub mod distortion;
 pub mod fuzz;
 pub mod geometry;
+pub(crate) mod linalg;
 pub mod locate;
 pub mod measure;
 pub mod model;

@@ -78,7 +78,7 @@ fn fit_once(points: &[Point]) -> Option<Ellipse> {
             atb[i] += row[i] * (-y * y);
         }
     }
-    let sol = solve5(ata, atb)?;
+    let sol = crate::linalg::solve(ata, atb, 1e-14)?;
     let (a, b, d, e, f) = (sol[0], sol[1], sol[2], sol[3], sol[4]);
     let c = 1.0 - a;
     let det = 4.0 * a * c - b * b;
@@ -98,28 +98,6 @@ fn fit_once(points: &[Point]) -> Option<Ellipse> {
         centre: [mx + x0 * s, my + y0 * s],
         cov: [q * c, -q * b / 2.0, q * a],
     })
-}
-
-fn solve5(mut a: [[f64; 5]; 5], mut b: [f64; 5]) -> Option<[f64; 5]> {
-    for col in 0..5 {
-        let piv = (col..5).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-14 {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for r in 0..5 {
-            if r != col {
-                let f = a[r][col] / a[col][col];
-                let prow = a[col];
-                for (x, p) in a[r].iter_mut().zip(prow) {
-                    *x -= f * p;
-                }
-                b[r] -= f * b[col];
-            }
-        }
-    }
-    Some([0, 1, 2, 3, 4].map(|i| b[i] / a[i][i]))
 }
 
 #[cfg(test)]

@@ -320,9 +320,9 @@ fn robust_fit<const N: usize>(
                 }
             }
         }
-        let new = solve_n(m, r)?;
+        let new = crate::linalg::solve(m, r, 1e-300)?;
         // Variance of the intercept: first column of the inverse.
-        cov00 = solve_n(m, unit)?[0];
+        cov00 = crate::linalg::solve(m, unit, 1e-300)?[0];
         let moved = (new[0] - coef[0]).abs();
         coef = new;
         let z: Vec<f64> = data
@@ -364,29 +364,7 @@ fn robust_fit<const N: usize>(
 
 /// Solves a 3×3 linear system by Gaussian elimination with partial pivoting.
 pub(crate) fn solve3(a: [[f64; 3]; 3], r: [f64; 3]) -> Option<[f64; 3]> {
-    solve_n(a, r)
-}
-
-/// Solves an N×N linear system by Gaussian elimination with partial pivoting.
-fn solve_n<const N: usize>(mut a: [[f64; N]; N], mut r: [f64; N]) -> Option<[f64; N]> {
-    for col in 0..N {
-        let piv = (col..N).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, piv);
-        r.swap(col, piv);
-        for row in 0..N {
-            if row != col {
-                let f = a[row][col] / a[col][col];
-                for j in 0..N {
-                    a[row][j] -= f * a[col][j];
-                }
-                r[row] -= f * r[col];
-            }
-        }
-    }
-    Some(std::array::from_fn(|i| r[i] / a[i][i]))
+    crate::linalg::solve(a, r, 1e-300)
 }
 
 #[cfg(test)]

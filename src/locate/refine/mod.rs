@@ -155,7 +155,7 @@ pub fn fit_homography(h0: Homography, edges: &[EdgeObs], fixed: &[(Point, Point)
         for (a, row) in ata.iter_mut().enumerate() {
             row[a] *= 1.0 + 1e-9;
         }
-        let Some(dx) = solve8(ata, atb) else {
+        let Some(dx) = crate::linalg::solve(ata, atb, 1e-300) else {
             return h;
         };
         let hn = with(&h, &dx);
@@ -168,28 +168,6 @@ pub fn fit_homography(h0: Homography, edges: &[EdgeObs], fixed: &[(Point, Point)
         }
     }
     h
-}
-
-fn solve8(mut a: [[f64; 8]; 8], mut b: [f64; 8]) -> Option<[f64; 8]> {
-    for col in 0..8 {
-        let piv = (col..8).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for r in 0..8 {
-            if r != col {
-                let f = a[r][col] / a[col][col];
-                let prow = a[col];
-                for (x, p) in a[r].iter_mut().zip(prow) {
-                    *x -= f * p;
-                }
-                b[r] -= f * b[col];
-            }
-        }
-    }
-    Some([0, 1, 2, 3, 4, 5, 6, 7].map(|i| b[i] / a[i][i]))
 }
 
 /// RMS distance of points from their total-least-squares line (px).
