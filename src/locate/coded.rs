@@ -10,7 +10,7 @@ use super::downscale::factor;
 use super::sample::Gray;
 use super::source::{BAND, Converted, Source, Window};
 use crate::photo::decode::{Decoded, Samples};
-use crate::photo::linearise::{Channel, CodeTable, Crop, Tone, code_table, row_converter};
+use crate::photo::linearise::{Channel, CodedTone, Crop, Tone, coded, row_converter};
 use rayon::prelude::*;
 use std::borrow::Cow;
 
@@ -19,8 +19,8 @@ pub struct Coded<'a, F> {
     /// Rows converted on demand (the windows, and the reduced image of floating-point samples).
     pub converted: Converted<F>,
     dec: &'a Decoded,
-    /// The code → linear table and the channel weights ([`code_table`]).
-    table: Option<CodeTable>,
+    /// The code → linear table and the channel weights ([`coded`]).
+    table: Option<CodedTone>,
 }
 
 /// `dec` as a search source: the linear values of `channel` through `tone`,
@@ -37,7 +37,7 @@ pub fn of_decoded<'a>(
             convert: row_converter(dec, tone, channel),
         },
         dec,
-        table: code_table(dec, tone, channel),
+        table: coded(dec, tone, channel),
     }
 }
 
@@ -49,13 +49,13 @@ impl<F: Fn(usize, usize, &mut [f32]) + Sync> Source for Coded<'_, F> {
     fn reduced(&self) -> Gray<'_> {
         let k = factor(self.dec.width, self.dec.height);
         let fast = match (&self.table, &self.dec.samples) {
-            (Some((lut, mix)), Samples::U8(codes)) if k > 1 => {
-                let lut: Option<&[f32; 256]> = lut.as_slice().try_into().ok();
-                lut.and_then(|lut| self.reduced_from(codes, lut, mix, k))
+            (Some(t), Samples::U8(codes)) if k > 1 => {
+                let lut: Option<&[f32; 256]> = t.table().try_into().ok();
+                lut.and_then(|lut| self.reduced_from(codes, lut, t.mix(), k))
             }
-            (Some((lut, mix)), Samples::U16(codes)) if k > 1 => {
-                let lut: Option<&[f32; 65536]> = lut.as_slice().try_into().ok();
-                lut.and_then(|lut| self.reduced_from(codes, lut, mix, k))
+            (Some(t), Samples::U16(codes)) if k > 1 => {
+                let lut: Option<&[f32; 65536]> = t.table().try_into().ok();
+                lut.and_then(|lut| self.reduced_from(codes, lut, t.mix(), k))
             }
             _ => None,
         };

@@ -1,6 +1,8 @@
 //! Frame: from a decoded photo or a raw frame, with its region known, to the
-//! linear planes that binning reads (only the read set is converted; the tone
-//! chosen in [`super::tone`]; raw greens balanced), then [`super::measure_planes`],
+//! linear samples that binning reads (a photo's integer codes read in place
+//! through the tone's table, float codes and raws converted over the read set
+//! only; the tone chosen in [`super::tone`]; raw greens balanced), then
+//! [`super::measure_planes`],
 //! with the source, bit depth, tone line, pixel pitch, preview and warnings
 //! filled in. Also the photo's decoding with its pixel pitch resolved.
 
@@ -275,23 +277,23 @@ pub(super) fn measure_decoded_at(
     // Integer codes are binned in place through the tone's table (no
     // converted copy: on a 24 MP strip that was 35 MB); float codes are
     // converted where binning reads.
-    let (crop, span) = read_set(
-        &roi,
-        target,
-        opts.margin,
-        lens.as_ref(),
-        dec.width,
-        dec.height,
-    )
-    .map_err(err)?;
     let coded = coded(dec, &tone, opts.channel);
     let (converted, preview) = rayon::join(
         || match coded {
-            Some(_) => Vec::new(),
-            None => planes_within(dec, crop, &tone, opts.channel, &span),
+            Some(_) => Ok(Vec::new()),
+            None => read_set(
+                &roi,
+                target,
+                opts.margin,
+                lens.as_ref(),
+                dec.width,
+                dec.height,
+            )
+            .map(|(crop, span)| planes_within(dec, crop, &tone, opts.channel, &span)),
         },
         || make_preview(dec, &roi),
     );
+    let converted = converted.map_err(err)?;
     let views = match &coded {
         Some(c) => c.planes(dec),
         None => converted.iter().map(PlaneRef::from).collect(),

@@ -326,7 +326,7 @@ pub(super) fn read_set(
         let mut hi = f64::NEG_INFINITY;
         for q in &outlines {
             for dy in [-2.0, 0.0, 2.0] {
-                if let Some((a, b)) = profile::outline_span(q, yc + dy) {
+                if let Some((a, b)) = profile::row_span(q, yc + dy) {
                     lo = lo.min(a);
                     hi = hi.max(b);
                 }

@@ -311,6 +311,19 @@ impl CodedTone {
             .collect()
     }
 
+    /// The code → linear table.
+    pub fn table(&self) -> &[f32] {
+        &self.lut
+    }
+
+    /// The first plane's channel weights `(channel, weight)`, as
+    /// [`row_converter`] applies them: `table[code[c]]` for one weight, or
+    /// `w0·table[code[c0]] + w1·table[code[c1]] + w2·table[code[c2]]` (summed
+    /// in that order) for three.
+    pub fn mix(&self) -> &[(usize, f32)] {
+        &self.mixes[0]
+    }
+
     fn codes<'a, T>(
         &'a self,
         codes: &'a [T],
@@ -454,23 +467,6 @@ fn convert_row_f32(out: &mut [f32], codes: &[f32], nc: usize, mix: &[(usize, f32
     };
     for (o, p) in out.iter_mut().zip(codes.chunks_exact(nc)) {
         *o = mix.iter().map(|&(c, wt)| wt * lin(p[c])).sum();
-    }
-}
-
-/// A code → linear table and the channel weights `(channel, weight)` of a plane ([`code_table`]).
-pub type CodeTable = (Vec<f32>, Vec<(usize, f32)>);
-
-/// The table and channel weights behind [`row_converter`] for integer codes
-/// (`None` for floating-point samples): a pixel's linear value is
-/// `table[code[c]]` for one weight `(c, _)`, or `w0·table[code[c0]] +
-/// w1·table[code[c1]] + w2·table[code[c2]]` (summed in that order) for three.
-pub fn code_table(dec: &Decoded, tone: &Tone, channel: Channel) -> Option<CodeTable> {
-    match dec.samples {
-        Samples::F32(_) => None,
-        _ => Some((
-            code_lut(dec, tone),
-            mixes(channel, dec.channels).swap_remove(0),
-        )),
     }
 }
 

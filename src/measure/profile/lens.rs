@@ -51,7 +51,7 @@ pub(super) fn bin_through_lens(
             let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
             let y = oy + j as f64 * sy;
             let mut out = Vec::new();
-            let Some((xa, xb)) = outline_span(&outline, y) else {
+            let Some((xa, xb)) = super::row_span(&outline, y) else {
                 return out;
             };
             let i0 = (((xa - 1.5 - ox) / sx).floor().max(0.0) as usize).min(plane.width);
@@ -113,24 +113,4 @@ pub(crate) fn photo_outline(strip: &Strip, t0: f64, t1: f64) -> Vec<Point> {
         outline.push(strip.to_photo([0.0, t1 - (t1 - t0) * i as f64 / 8.0]));
     }
     outline
-}
-
-/// The x-extent where the horizontal line at `y` crosses a closed polygon.
-pub(crate) fn outline_span(poly: &[Point], y: f64) -> Option<(f64, f64)> {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for k in 0..poly.len() {
-        let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
-        if (a[1] <= y && b[1] >= y) || (b[1] <= y && a[1] >= y) {
-            let x = if (b[1] - a[1]).abs() < 1e-12 {
-                lo = lo.min(a[0].min(b[0]));
-                hi = hi.max(a[0].max(b[0]));
-                continue;
-            } else {
-                a[0] + (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1])
-            };
-            lo = lo.min(x);
-            hi = hi.max(x);
-        }
-    }
-    (lo <= hi).then_some((lo, hi))
 }

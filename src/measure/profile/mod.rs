@@ -16,7 +16,7 @@ use crate::distortion::Lens;
 use crate::geometry::{Homography, Point};
 use crate::photo::{Plane, PlaneRef};
 use acc::{BinAcc, EXTREMES};
-pub(crate) use lens::{outline_span, photo_outline};
+pub(crate) use lens::photo_outline;
 use rayon::prelude::*;
 use region::Region;
 pub use region::row_span;
@@ -56,34 +56,6 @@ impl Strip {
     pub fn image_quad(&self, t0: f64, t1: f64) -> [Point; 4] {
         let l = self.length;
         [[0.0, t0], [l, t0], [l, t1], [0.0, t1]].map(|p| self.to_photo(p))
-    }
-
-    /// How far (px) the photo's outline of region t ∈ [t0, t1] bows out of
-    /// [`Strip::image_quad`] (0 without distortion).
-    pub fn bow_px(&self, t0: f64, t1: f64) -> f64 {
-        if self.lens.is_none() {
-            return 0.0;
-        }
-        let q = self.image_quad(t0, t1);
-        let l = self.length;
-        let edges = [
-            ([0.0, t0], [l, t0], 0),
-            ([l, t0], [l, t1], 1),
-            ([l, t1], [0.0, t1], 2),
-            ([0.0, t1], [0.0, t0], 3),
-        ];
-        let mut worst = 0.0f64;
-        for (a, b, k) in edges {
-            let (p0, p1) = (q[k], q[(k + 1) % 4]);
-            let len = (p1[0] - p0[0]).hypot(p1[1] - p0[1]).max(1e-9);
-            for i in 1..32 {
-                let u = i as f64 / 32.0;
-                let p = self.to_photo([a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])]);
-                let d = ((p1[0] - p0[0]) * (p[1] - p0[1]) - (p1[1] - p0[1]) * (p[0] - p0[0])) / len;
-                worst = worst.max(d.abs());
-            }
-        }
-        worst
     }
 
     /// Scale and direction of the sweep in the image at distance `s` along the strip's centre line.

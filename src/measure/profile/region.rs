@@ -211,12 +211,13 @@ pub(super) struct Band {
     rows: Vec<(usize, usize)>,
 }
 
-/// The x-interval where the horizontal line at `y` crosses a convex quadrilateral.
-pub fn row_span(q: &[Point; 4], y: f64) -> Option<(f64, f64)> {
+/// The x-extent where the horizontal line at `y` crosses a closed polygon
+/// (a strip's corner quadrilateral, or its curved outline under a lens).
+pub fn row_span(q: &[Point], y: f64) -> Option<(f64, f64)> {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
-    for k in 0..4 {
-        let (a, b) = (q[k], q[(k + 1) % 4]);
+    for k in 0..q.len() {
+        let (a, b) = (q[k], q[(k + 1) % q.len()]);
         let (ya, yb) = (a[1].min(b[1]), a[1].max(b[1]));
         if y < ya || y > yb {
             continue;
