@@ -146,6 +146,7 @@ mod tests {
             rows: h,
             warnings: vec![],
             declared_tone: None,
+            jpeg_luma_quant: None,
         })
     }
 

@@ -206,6 +206,7 @@ mod tests {
             rows: h,
             warnings: Vec::new(),
             declared_tone: None,
+            jpeg_luma_quant: None,
         }
     }
 

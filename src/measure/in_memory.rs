@@ -66,6 +66,7 @@ pub fn decoded_from_samples(
         rows: height,
         warnings: Vec::new(),
         declared_tone: None,
+        jpeg_luma_quant: None,
     })
 }
 

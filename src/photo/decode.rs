@@ -75,6 +75,8 @@ pub struct Decoded {
     pub warnings: Vec<String>,
     /// The transfer curve the file declares (PNG chunks, ICC profile), if any.
     pub declared_tone: Option<super::transfer::DeclaredTone>,
+    /// A JPEG's luma quantisation table (natural order, DCT units), from its headers.
+    pub jpeg_luma_quant: Option<Box<[u16; 64]>>,
 }
 
 impl Decoded {
@@ -201,6 +203,7 @@ pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Dec
             rows: height,
             warnings: Vec::new(),
             declared_tone,
+            jpeg_luma_quant: None,
         });
     }
     let img = DynamicImage::from_decoder(decoder).map_err(fail)?;
@@ -229,6 +232,7 @@ pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Dec
         rows: height,
         warnings: Vec::new(),
         declared_tone,
+        jpeg_luma_quant: None,
     })
 }
 

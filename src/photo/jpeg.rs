@@ -206,6 +206,7 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
         rows,
         warnings,
         declared_tone: None,
+        jpeg_luma_quant: super::jpeg_quant::luma_table(bytes).map(Box::new),
     })
 }
 

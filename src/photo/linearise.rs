@@ -499,6 +499,7 @@ mod tests {
             rows: 2,
             warnings: Vec::new(),
             declared_tone: None,
+            jpeg_luma_quant: None,
         };
         let crop = Crop {
             x0: 1,

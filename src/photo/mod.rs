@@ -8,6 +8,7 @@ pub mod exif;
 pub(crate) mod hugebuf;
 pub mod jpeg;
 pub mod jpeg_check;
+pub mod jpeg_quant;
 pub mod linearise;
 pub mod pitch;
 pub mod plane_ref;

@@ -124,6 +124,36 @@ fn unsharp_mask_peaking_near_1_15_within_0_01_and_never_clipped() {
 #[test]
 fn rgb_jpeg_q75_420_with_noise_within_0_012() {
     check("rgb_jpeg75_420", 0.012);
+    // The coarse table is read from the file and said: its quantisation is part of this MTF.
+    let shot = nuisance_cases(7)
+        .into_iter()
+        .find(|s| s.name == "rgb_jpeg75_420")
+        .unwrap();
+    let dec = decode_bytes(&shot.encode(1), "q75.jpg").unwrap();
+    let opts = MeasureOptions {
+        roi: Some(shot.quad),
+        ..MeasureOptions::default()
+    };
+    let m = measure_decoded(&dec, "q75.jpg", None, &opts).unwrap();
+    assert!(
+        m.warnings
+            .iter()
+            .any(|w| w.starts_with("JPEG quality ≈ 75 ")),
+        "{:?}",
+        m.warnings
+    );
+    // At q92 (a camera's usual "fine") nothing is said.
+    let fine = SynthShot {
+        jpeg_quality: Some(92),
+        ..shot
+    };
+    let dec = decode_bytes(&fine.encode(1), "q92.jpg").unwrap();
+    let m = measure_decoded(&dec, "q92.jpg", None, &opts).unwrap();
+    assert!(
+        !m.warnings.iter().any(|w| w.starts_with("JPEG")),
+        "{:?}",
+        m.warnings
+    );
 }
 
 /// Exact corners stay exact: the default refinement fits the long edges and turns
