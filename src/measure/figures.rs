@@ -6,7 +6,9 @@
 //! Both kinds of crossing use the same convention: the non-aliased points,
 //! lightly smoothed (3-point running mean, so one noisy point does not
 //! decide), the first fall through the level, linear interpolation between
-//! the two points around it. The peak is the largest smoothed value. Without
+//! the two points around it; then a weighted quadratic over the points
+//! within ±8 % of that frequency refines it (a ripple of the curve, such as
+//! a coarse JPEG's, is averaged instead of followed). The peak is the largest smoothed value. Without
 //! sharpening the curve's largest value is its low-frequency 1 (a peak that
 //! does not rise above 1 by more than [`PEAK_SIGMAS`] times its uncertainty
 //! and [`PEAK_FLOOR`] is noise): the peak is then taken as 1 at 0 cy/px and
