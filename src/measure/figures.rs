@@ -103,6 +103,10 @@ fn refine_fall(pts: &[&MtfPoint], f0: f64, level: f64, lo: f64) -> Option<f64> {
     let end = pts.partition_point(|p| p.freq_cy_px <= f0 + hw);
     let first = first.min(k.saturating_sub(CROSSING_FIT_SIDE_POINTS));
     let end = end.max(k + CROSSING_FIT_SIDE_POINTS).min(pts.len());
+    // (Unsorted frequencies, never produced here, give no fit rather than a bad slice.)
+    if first >= end {
+        return None;
+    }
     let near = &pts[first..end];
     if near.len() < 2 * CROSSING_FIT_SIDE_POINTS || pts[first].freq_cy_px < lo {
         return None;
@@ -268,6 +272,28 @@ mod tests {
             worst = worst.max((g.mtf50_cy_px.unwrap() / 0.3 - 1.0).abs());
         }
         assert!(worst < 0.005, "{worst}");
+    }
+
+    /// Zero, NaN and infinite uncertainties, repeated and unsorted
+    /// frequencies: figures without a panic, crossings inside the data.
+    #[test]
+    fn odd_uncertainties_and_frequencies_do_not_break_the_fit() {
+        let gauss = |f: f64| (-(f / 0.3).powi(2) * std::f64::consts::LN_2).exp();
+        for err in [0.0, f64::NAN, f64::INFINITY, 1e-300] {
+            let g = figures(&curve(gauss, err));
+            let f50 = g.mtf50_cy_px.unwrap();
+            assert!((f50 / 0.3 - 1.0).abs() < 0.01, "{err}: {f50}");
+        }
+        let mut pts = curve(gauss, 0.003);
+        pts.reverse();
+        pts.swap(3, 90);
+        let dup = pts[50];
+        pts.insert(50, dup);
+        let g = figures(&pts);
+        assert!(
+            g.mtf50_cy_px.is_none_or(|f| (0.0..=0.5).contains(&f)),
+            "{g:?}"
+        );
     }
 
     /// A smooth curve's crossings are unchanged by the fit (to 10⁻⁴ relative).
