@@ -194,6 +194,7 @@ pub(super) fn measure_frame_at(
         &o,
         RAW_CLIP,
         distortion,
+        false,
     )
     .map_err(err)?;
     drop(groups);
@@ -299,6 +300,7 @@ pub(super) fn measure_decoded_at(
         None => converted.iter().map(PlaneRef::from).collect(),
     };
     let names = plane_names(opts.channel, dec.channels);
+    let coarse = coarse_jpeg_quality(dec);
     let groups: Vec<(&str, Vec<PlaneRef>)> = names
         .into_iter()
         .zip(views.into_iter().map(|p| vec![p]))
@@ -311,13 +313,14 @@ pub(super) fn measure_decoded_at(
         opts,
         clip_level,
         distortion,
+        coarse.is_some(),
     )
     .map_err(err)?;
     m.source = name.to_string();
     m.bits = dec.bits();
     m.tone = tone_desc;
     m.preview = preview;
-    said.warnings.extend(coarse_jpeg_warning(dec));
+    said.warnings.extend(coarse.map(coarse_jpeg_warning));
     said.put_before(&mut m);
     Ok(m)
 }
@@ -325,19 +328,22 @@ pub(super) fn measure_decoded_at(
 /// Below this IJG quality a JPEG's block quantisation visibly moves its MTF.
 const COARSE_JPEG_QUALITY: f64 = 90.0;
 
-/// A warning when a JPEG's luma table is coarse (IJG quality below
+/// The IJG quality of a JPEG whose luma table is coarse (below
 /// [`COARSE_JPEG_QUALITY`]): its 8×8 quantisation is part of the file's MTF.
-/// Simulated q75 shots: ripples of ±0.015 at 0.25–0.45 cy/px, and a loss
-/// of up to 0.7 % at 0.3 cy/px when the sweep is tilted 1–3° to the block
-/// grid (small across-block phase terms are rounded to zero); q90 moves
-/// MTF50 by less than 0.05 %.
-fn coarse_jpeg_warning(dec: &Decoded) -> Option<String> {
+fn coarse_jpeg_quality(dec: &Decoded) -> Option<f64> {
     let q = crate::photo::jpeg_quant::ijg_quality(dec.jpeg_luma_quant.as_deref()?);
-    (q < COARSE_JPEG_QUALITY).then(|| {
-        format!(
-            "JPEG quality ≈ {q:.0} (luma table): its 8×8 block quantisation is part of this MTF \
-             (simulated q75: ±0.015 ripple and up to 1 % lower MTF50 than the optics'); \
-             shoot at quality ≥ 90 or raw for the lens's own MTF"
-        )
-    })
+    (q < COARSE_JPEG_QUALITY).then_some(q)
+}
+
+/// The warning for a coarse JPEG. Simulated q75 shots: ripples of ±0.015 at
+/// 0.25–0.45 cy/px (smoothed out, [`super::strip`]), and a loss of up to
+/// 1 % at 0.3 cy/px when the sweep is tilted 1–3° to the block grid (small
+/// across-block phase terms are rounded to zero); q90 moves MTF50 by less
+/// than 0.05 %.
+fn coarse_jpeg_warning(q: f64) -> String {
+    format!(
+        "JPEG quality ≈ {q:.0} (luma table): its 8×8 block quantisation is part of this MTF \
+         (simulated q75: up to 1.3 % lower MTF50 than the optics'; its ripple is smoothed over \
+         ±0.0075 cy/px); shoot at quality ≥ 90 or raw for the lens's own MTF"
+    )
 }

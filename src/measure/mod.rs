@@ -305,7 +305,9 @@ pub fn measure_planes(
 ) -> Result<Measurement, Failure> {
     let distortion = given_distortion(opts, roi, size.0, size.1)?;
     let views = plane_views(groups);
-    measure_planes_lens(&views, size, roi, target, opts, clip_level, distortion)
+    measure_planes_lens(
+        &views, size, roi, target, opts, clip_level, distortion, false,
+    )
 }
 
 /// Groups of planes as groups of views ([`PlaneRef`]).
@@ -370,7 +372,10 @@ fn resolve_distortion<'a>(
     Ok(tried.into_iter().max_by_key(|d| d.edge_points))
 }
 
-/// [`measure_planes`] with the distortion already resolved.
+/// [`measure_planes`] with the distortion already resolved; `block_ripple`:
+/// the planes are a coarse JPEG's luma, whose block quantisation ripples the
+/// curve (smoothed, [`strip`]).
+#[allow(clippy::too_many_arguments)]
 fn measure_planes_lens(
     groups: &[(&str, Vec<PlaneRef>)],
     size: (usize, usize),
@@ -379,6 +384,7 @@ fn measure_planes_lens(
     opts: &MeasureOptions,
     clip_level: f32,
     distortion: Option<DistortionFound>,
+    block_ripple: bool,
 ) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
@@ -405,7 +411,16 @@ fn measure_planes_lens(
         let one = |(id, strip, tlaw, contrast): &StripSpec| {
             let measured = |seed: Option<PhaseLaw>| {
                 measure_strip(
-                    plane_refs, name, id, strip, *tlaw, seed, *contrast, opts, &bin_opts,
+                    plane_refs,
+                    name,
+                    id,
+                    strip,
+                    *tlaw,
+                    seed,
+                    *contrast,
+                    opts,
+                    &bin_opts,
+                    block_ripple,
                 )
             };
             // A channel whose own crossings cannot be followed (red or blue
