@@ -232,29 +232,34 @@ pub fn outputs(
     let out_err =
         |e: sweepmtf::report::atomic::ReportError| CliError::new(Code::Output, e.to_string());
     let csv_path = out("mtf.csv");
-    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
-    if m.curves.is_empty() {
-        files.push((csv_path.clone(), extras.patches_csv(csv::patches_csv(m))));
-    } else {
-        files.push((csv_path.clone(), extras.csv(csv::curves_csv(m))));
-        if !m.patches.is_empty() {
-            files.push((out("patches.csv"), extras.patches_csv(csv::patches_csv(m))));
-        }
-    }
     let plot_ext = match plot {
         PlotFormat::Png => "mtf.png",
         PlotFormat::Svg => "mtf.svg",
     };
-    // The two pictures are drawn and encoded side by side.
-    let (mtf_png, roi_png) = rayon::join(
-        || mtf_plot_with(m, plot, &extras.plot),
+    // The region picture (the longest: a large PNG to encode) is drawn and
+    // encoded beside everything else; the files keep their order.
+    let (roi_png, rest) = rayon::join(
         || roi_plot::roi_plot(m),
+        || {
+            let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+            if m.curves.is_empty() {
+                files.push((csv_path.clone(), extras.patches_csv(csv::patches_csv(m))));
+            } else {
+                files.push((csv_path.clone(), extras.csv(csv::curves_csv(m))));
+                if !m.patches.is_empty() {
+                    files.push((out("patches.csv"), extras.patches_csv(csv::patches_csv(m))));
+                }
+            }
+            let mtf_png = mtf_plot_with(m, plot, &extras.plot);
+            let summary_value = extras.json(summary(m, Some(timings)), m);
+            let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
+            summary_text.push('\n');
+            (files, mtf_png, summary_value, summary_text)
+        },
     );
+    let (mut files, mtf_png, summary_value, summary_text) = rest;
     files.push((out(plot_ext), mtf_png.map_err(out_err)?));
     files.push((out("roi.png"), roi_png.map_err(out_err)?));
-    let summary_value = extras.json(summary(m, Some(timings)), m);
-    let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
-    summary_text.push('\n');
     files.push((out("summary.json"), summary_text.into_bytes()));
     Ok(Outputs {
         files,
