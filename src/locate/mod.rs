@@ -125,7 +125,22 @@ pub fn find_charts<S: Source + ?Sized>(
     src: &S,
     target: &Target,
 ) -> Result<Vec<Located>, LocateError> {
-    let s = search(src, target)?;
+    found(search(src, target)?, target)
+}
+
+/// [`find_charts`] with the target's pattern already sampled
+/// ([`assign::Pattern::new`]; it does not depend on the image, so a caller
+/// may make it while the photo is decoded).
+pub fn find_charts_with<S: Source + ?Sized>(
+    src: &S,
+    target: &Target,
+    pattern: &assign::Pattern,
+) -> Result<Vec<Located>, LocateError> {
+    found(search_with(src, target, Some(pattern))?, target)
+}
+
+/// The charts a search found, or why none was.
+fn found(s: Search, target: &Target) -> Result<Vec<Located>, LocateError> {
     if s.charts.is_empty() {
         return Err(not_found(target, s.candidates));
     }
@@ -162,6 +177,15 @@ pub fn find_chart<S: Source + ?Sized>(
 /// `src` is a linear [`Plane`](crate::photo::Plane) or a photo converted on demand ([`Converted`]):
 /// the search reads a reduced image and full resolution only near the marks.
 pub fn search<S: Source + ?Sized>(src: &S, target: &Target) -> Result<Search, LocateError> {
+    search_with(src, target, None)
+}
+
+/// [`search`] with the target's pattern, if already sampled.
+fn search_with<S: Source + ?Sized>(
+    src: &S,
+    target: &Target,
+    pattern: Option<&assign::Pattern>,
+) -> Result<Search, LocateError> {
     let nf = target.fiducials.len();
     if nf < 3 {
         return Err(LocateError::NoFiducials(nf));
@@ -172,9 +196,17 @@ pub fn search<S: Source + ?Sized>(src: &S, target: &Target) -> Result<Search, Lo
     }
     // The target's pattern does not depend on the image: made while the
     // image is reduced (memory-bound) rather than beside the blob search.
-    let (small, pattern) = rayon::join(|| src.reduced(), || assign::Pattern::new(target));
+    let made;
+    let (small, pattern) = match pattern {
+        Some(p) => (src.reduced(), p),
+        None => {
+            let (small, p) = rayon::join(|| src.reduced(), || assign::Pattern::new(target));
+            made = p;
+            (small, &made)
+        }
+    };
     let mut candidates = blobs::find_candidates(&small);
-    let picks = assign::choose(&small, target, &pattern, &candidates);
+    let picks = assign::choose(&small, target, pattern, &candidates);
     let mut charts = Vec::new();
     for pick in picks {
         if let Some(mut located) = ellipse::finish(src, target, &pick, &candidates) {

@@ -147,9 +147,18 @@ pub fn measure_file_each(
             })
             .collect();
     }
-    let (dec, o, said) = decode_with_pitch(path, &name, opts)?;
-    let charts = found(crate::locate::find_charts(&grey_source(&dec), &target))
-        .map_err(|e| said.blame(e))?;
+    // The target's pattern (for verifying charts) is sampled while the photo is decoded.
+    let (decoded, pattern) = rayon::join(
+        || decode_with_pitch(path, &name, opts),
+        || crate::locate::assign::Pattern::new(&target),
+    );
+    let (dec, o, said) = decoded?;
+    let charts = found(crate::locate::find_charts_with(
+        &grey_source(&dec),
+        &target,
+        &pattern,
+    ))
+    .map_err(|e| said.blame(e))?;
     let n = charts.len();
     charts
         .iter()
