@@ -3,7 +3,7 @@
 //! sampled at, and the local-frequency check (the image's own frequency
 //! against the law) that flags aliasing.
 
-use super::estimate::fit::{PhaseTable, local_fit};
+use super::estimate::fit::{LocalFit, PhaseTable, local_fit};
 use super::law::{self, PhaseLaw};
 use super::profile::Profile;
 use rayon::prelude::*;
@@ -114,6 +114,9 @@ pub(super) fn output_grid(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Vec<f64> {
     out
 }
 
+/// Half-width (cycles) of the local fits of the local-frequency check.
+pub(super) const DEV_HALF_CYCLES: f64 = 2.0;
+
 /// Relative deviation of the image's local frequency from the law, (s, deviation) at grid points with a clear signal.
 pub(super) fn local_freq_deviation(
     prof: &Profile,
@@ -121,10 +124,24 @@ pub(super) fn local_freq_deviation(
     law: &PhaseLaw,
     grid: &[f64],
 ) -> Vec<(f64, f64)> {
-    let fits: Vec<(f64, f64, f64)> = grid
+    let fits: Vec<Option<LocalFit>> = grid
         .par_iter()
-        .filter_map(|&s| {
-            let f = local_fit(prof, table, law, s, 2.0)?;
+        .map(|&s| local_fit(prof, table, law, s, DEV_HALF_CYCLES))
+        .collect();
+    deviation_from_fits(law, grid, &fits)
+}
+
+/// [`local_freq_deviation`] from its local fits (±[`DEV_HALF_CYCLES`]) at the grid points, made already.
+pub(super) fn deviation_from_fits(
+    law: &PhaseLaw,
+    grid: &[f64],
+    fits: &[Option<LocalFit>],
+) -> Vec<(f64, f64)> {
+    let fits: Vec<(f64, f64, f64)> = grid
+        .iter()
+        .zip(fits)
+        .filter_map(|(&s, f)| {
+            let f = f.as_ref()?;
             let snr = f.amp / f.amp_var.sqrt().max(1e-12);
             (snr > 15.0).then_some((s, law.phase(s), f.phase_shift))
         })

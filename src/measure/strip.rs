@@ -5,8 +5,11 @@
 //! they alias, and normalised by the chart modulation ([`super::normalise`])
 //! into a [`Curve`].
 
-use super::estimate::fit::PhaseTable;
-use super::frequency::{dev_at, local_freq_deviation, output_grid, refine_law};
+use super::estimate::Method;
+use super::estimate::fit::{LocalFit, PhaseTable, SineFit, local_fit};
+use super::frequency::{
+    DEV_HALF_CYCLES, dev_at, deviation_from_fits, local_freq_deviation, output_grid, refine_law,
+};
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
 use super::{curve, law_guess, normalise};
@@ -152,10 +155,28 @@ pub(super) fn measure_strip(
     // image's local frequency versus the law).
     // Both tabulate the law over the bins: once, shared.
     let table = PhaseTable::new(&prof, &law);
-    let (mods, dev) = rayon::join(
-        || est.estimate_tabulated(&prof, &law, &table, &grid),
-        || local_freq_deviation(&prof, &table, &law, &grid),
-    );
+    let (mods, dev) = if opts.method == Method::Fit && 0.5 * opts.window_cycles == DEV_HALF_CYCLES {
+        // The default estimator's fits are the check's own (same positions,
+        // same half-width): made once, read by both.
+        let fits: Vec<Option<LocalFit>> = grid
+            .par_iter()
+            .map(|&s| local_fit(&prof, &table, &law, s, DEV_HALF_CYCLES))
+            .collect();
+        let sine = SineFit {
+            window_cycles: opts.window_cycles,
+        };
+        let mods = grid
+            .iter()
+            .zip(&fits)
+            .filter_map(|(&s, f)| sine.point(s, f.as_ref()?))
+            .collect();
+        (mods, deviation_from_fits(&law, &grid, &fits))
+    } else {
+        rayon::join(
+            || est.estimate_tabulated(&prof, &law, &table, &grid),
+            || local_freq_deviation(&prof, &table, &law, &grid),
+        )
+    };
     drop(table);
     let mut points: Vec<MtfPoint> = mods
         .iter()

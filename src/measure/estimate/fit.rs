@@ -253,6 +253,18 @@ fn invert<const M: usize>(m: [[f64; M]; M]) -> Option<[[f64; M]; M]> {
     Some(inv)
 }
 
+impl SineFit {
+    /// The modulation point of the local fit `f` at `s0` (over ±half the
+    /// window), or `None` where the estimator leaves the position out.
+    pub fn point(&self, s0: f64, f: &LocalFit) -> Option<ModPoint> {
+        (f.mean > 0.0 && f.cycles >= 0.8 * self.window_cycles.min(3.0)).then(|| ModPoint {
+            s: s0,
+            modulation: f.modulation(),
+            err: f.modulation_err(),
+        })
+    }
+}
+
 impl Estimator for SineFit {
     fn name(&self) -> &'static str {
         "fit"
@@ -271,12 +283,10 @@ impl Estimator for SineFit {
     ) -> Vec<ModPoint> {
         grid.par_iter()
             .filter_map(|&s0| {
-                let f = local_fit(prof, table, law, s0, 0.5 * self.window_cycles)?;
-                (f.mean > 0.0 && f.cycles >= 0.8 * self.window_cycles.min(3.0)).then(|| ModPoint {
-                    s: s0,
-                    modulation: f.modulation(),
-                    err: f.modulation_err(),
-                })
+                self.point(
+                    s0,
+                    &local_fit(prof, table, law, s0, 0.5 * self.window_cycles)?,
+                )
             })
             .collect()
     }
