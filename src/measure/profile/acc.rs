@@ -11,6 +11,11 @@ use super::Profile;
 /// bin) none, 8.5 ms, even though every sample then passes a longer network.
 pub(super) const EXTREMES: usize = 6;
 
+/// Lanes of the extremes' arrays: [`EXTREMES`] rounded up to a whole number
+/// of 4-wide vectors, so that an insertion is a few vector min/max (the lanes
+/// past `EXTREMES` hold the next extremes and are never read).
+pub(super) const LANES: usize = 8;
+
 /// One bin's running sums, and its most extreme samples for the robust mean.
 #[derive(Clone, Copy)]
 pub(super) struct BinAcc {
@@ -21,10 +26,12 @@ pub(super) struct BinAcc {
     pub(super) rsum: f64,
     pub(super) n: u32,
     pub(super) rn: u32,
-    /// The largest samples, descending (−∞ while unfilled).
-    pub(super) hi: [f32; EXTREMES],
-    /// The smallest samples, ascending (+∞ while unfilled).
-    pub(super) lo: [f32; EXTREMES],
+    /// The largest samples, descending (−∞ while unfilled); the first
+    /// [`EXTREMES`] are the bin's.
+    pub(super) hi: [f32; LANES],
+    /// The smallest samples, ascending (+∞ while unfilled); the first
+    /// [`EXTREMES`] are the bin's.
+    pub(super) lo: [f32; LANES],
 }
 
 impl Default for BinAcc {
@@ -37,8 +44,8 @@ impl Default for BinAcc {
             rsum: 0.0,
             n: 0,
             rn: 0,
-            hi: [f32::NEG_INFINITY; EXTREMES],
-            lo: [f32::INFINITY; EXTREMES],
+            hi: [f32::NEG_INFINITY; LANES],
+            lo: [f32::INFINITY; LANES],
         }
     }
 }
@@ -74,13 +81,15 @@ impl BinAcc {
         self.ssum += s;
         self.ssum2 += s * s;
         self.n += 1;
-        let (h, l) = (&mut self.hi, &mut self.lo);
-        for k in (1..EXTREMES).rev() {
-            h[k] = fmax(h[k], fmin(h[k - 1], v));
-            l[k] = fmin(l[k], fmax(l[k - 1], v));
+        // Lane k takes the larger of itself and the smaller of lane k − 1
+        // (before this sample) and v; lane 0 the larger of itself and v.
+        let (h, l) = (self.hi, self.lo);
+        let sh = [f32::INFINITY, h[0], h[1], h[2], h[3], h[4], h[5], h[6]];
+        let sl = [f32::NEG_INFINITY, l[0], l[1], l[2], l[3], l[4], l[5], l[6]];
+        for k in 0..LANES {
+            self.hi[k] = fmax(h[k], fmin(sh[k], v));
+            self.lo[k] = fmin(l[k], fmax(sl[k], v));
         }
-        h[0] = fmax(h[0], v);
-        l[0] = fmin(l[0], v);
     }
 }
 

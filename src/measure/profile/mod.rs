@@ -267,8 +267,14 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
             continue;
         }
         let (mu, lim) = a.clip_limits();
-        let out_hi = a.hi.iter().filter(|&&v| v as f64 - mu > lim).count();
-        let out_lo = a.lo.iter().filter(|&&v| mu - v as f64 > lim).count();
+        let out_hi = a.hi[..EXTREMES]
+            .iter()
+            .filter(|&&v| v as f64 - mu > lim)
+            .count();
+        let out_lo = a.lo[..EXTREMES]
+            .iter()
+            .filter(|&&v| mu - v as f64 > lim)
+            .count();
         if out_hi == EXTREMES || out_lo == EXTREMES {
             revisit.push((b, mu, lim));
             continue;
