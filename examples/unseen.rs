@@ -21,9 +21,9 @@ use sweepmtf::measure::synth::nuisance_cases;
 use sweepmtf::measure::{MeasureOptions, measure_decoded};
 use sweepmtf::model::System;
 use sweepmtf::photo::decode::decode_bytes;
-use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for};
+use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for, strip_card};
 use sweepmtf::simulate::{Camera, PhotoFormat, Shot, TruthRow, render};
-use sweepmtf::target::{Direction, Rect, Sweep, SweepLaw, Target};
+use sweepmtf::target::{SweepLaw, Target};
 
 /// (RMS, MTF50 relative error, chart modulation relative error) of one shot.
 type Score = (f64, f64, f64);
@@ -136,34 +136,6 @@ impl Lcg {
     }
 }
 
-/// A long thin card: one log sweep 240×20 mm on white 260×40 mm.
-fn strip_target(f_min_cy_mm: f64, f_max_cy_mm: f64) -> Target {
-    Target {
-        name: "strip".into(),
-        width_mm: 260.0,
-        height_mm: 40.0,
-        background: 1.0,
-        sweeps: vec![Sweep {
-            id: "main".into(),
-            rect: Rect {
-                x_mm: 10.0,
-                y_mm: 10.0,
-                width_mm: 240.0,
-                height_mm: 20.0,
-            },
-            direction: Direction::X,
-            law: SweepLaw::Log,
-            f_min_cy_mm,
-            f_max_cy_mm,
-            mean: 0.45,
-            contrast: 0.8,
-        }],
-        patches: vec![],
-        greys: vec![],
-        fiducials: vec![],
-    }
-}
-
 fn roi_of(shot: &Shot) -> [[f64; 2]; 4] {
     let r = shot.roi().expect("a strip shot has corners");
     [[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]
@@ -222,7 +194,7 @@ fn distorted(k: u64, u: &mut Lcg) -> Result<Score, String> {
         ..Camera::default()
     };
     let sigma = 0.5 + 0.2 * u.next();
-    let t = strip_target(0.006 * px_per_mm, 0.6 * px_per_mm);
+    let t = strip_card(0.006 * px_per_mm, 0.6 * px_per_mm);
     let shot = shoot(&t, &cam, sigma)?;
     let bytes = shot.encode(PhotoFormat::Png).map_err(|e| e.to_string())?;
     let rows = &shot.truth().ok_or("no truth")?.rows;

@@ -10,9 +10,8 @@ use sweepmtf::distortion::Ptlens;
 use sweepmtf::measure::{MeasureOptions, measure_decoded};
 use sweepmtf::model::System;
 use sweepmtf::photo::decode::decode_bytes;
-use sweepmtf::simulate::demo::GaussianPsf;
+use sweepmtf::simulate::demo::{GaussianPsf, strip_card};
 use sweepmtf::simulate::{Camera, encode::PhotoFormat, render};
-use sweepmtf::target::{Direction, Rect, Sweep, SweepLaw, Target};
 
 /// One row: (RMS |MTF − truth| over 0.01–0.45 cy/px, MTF50 error %, chart modulation, b used, ms).
 fn row(
@@ -25,30 +24,7 @@ fn row(
     let (w, h) = (1200usize, 800usize);
     let chart_px = 1100.0;
     let ppm = chart_px / 260.0;
-    let target = Target {
-        name: "strip".into(),
-        width_mm: 260.0,
-        height_mm: 40.0,
-        background: 1.0,
-        sweeps: vec![Sweep {
-            id: "main".into(),
-            rect: Rect {
-                x_mm: 10.0,
-                y_mm: 10.0,
-                width_mm: 240.0,
-                height_mm: 20.0,
-            },
-            direction: Direction::X,
-            law: SweepLaw::Log,
-            f_min_cy_mm: 0.006 * ppm,
-            f_max_cy_mm: 0.6 * ppm,
-            mean: 0.45,
-            contrast: 0.8,
-        }],
-        patches: vec![],
-        greys: vec![],
-        fiducials: vec![],
-    };
+    let target = strip_card(0.006 * ppm, 0.6 * ppm);
     let camera = Camera {
         width_px: w,
         height_px: h,

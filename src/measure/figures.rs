@@ -235,10 +235,11 @@ impl Figures {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn curve(f: impl Fn(f64) -> f64, err: f64) -> Vec<MtfPoint> {
+    /// 200 points of `f` from 0.005 cy/px in steps of 0.0025, each ± `err`, aliased above 0.5.
+    pub(in crate::measure) fn curve(f: impl Fn(f64) -> f64, err: f64) -> Vec<MtfPoint> {
         (0..200)
             .map(|i| {
                 let fr = 0.005 + i as f64 * 0.0025;

@@ -328,23 +328,7 @@ fn smooth_block_ripple(points: &mut [MtfPoint]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn curve(f: impl Fn(f64) -> f64) -> Vec<MtfPoint> {
-        (0..300)
-            .map(|i| {
-                let fr = 0.005 + i as f64 * 0.0017;
-                MtfPoint {
-                    s: i as f64,
-                    freq_cy_px: fr,
-                    freq_chart: fr,
-                    modulation: f(fr),
-                    mtf: f(fr),
-                    mtf_err: 0.003,
-                    aliased: fr > 0.5,
-                }
-            })
-            .collect()
-    }
+    use crate::measure::figures::tests::curve;
 
     fn gauss(f: f64) -> f64 {
         (-(f / 0.3).powi(2) * std::f64::consts::LN_2).exp()
@@ -364,7 +348,7 @@ mod tests {
                     0.0
                 }
         };
-        let mut pts = curve(rippled);
+        let mut pts = curve(rippled, 0.003);
         smooth_block_ripple(&mut pts);
         for p in pts.iter().filter(|p| (0.23..0.48).contains(&p.freq_cy_px)) {
             assert!(
@@ -374,7 +358,7 @@ mod tests {
                 p.mtf
             );
         }
-        let mut pts = curve(gauss);
+        let mut pts = curve(gauss, 0.003);
         smooth_block_ripple(&mut pts);
         for p in &pts {
             let moved = (p.mtf - gauss(p.freq_cy_px)).abs();

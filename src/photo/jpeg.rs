@@ -56,15 +56,21 @@ struct Frame {
     first_scan: usize,
 }
 
-/// Walks the marker segments up to the first scan header; `None` when the
-/// headers are not what a cut needs (the whole file is then decoded).
-fn frame_facts(b: &[u8]) -> Option<Frame> {
-    if b.get(..2)? != [0xFF, 0xD8] {
-        return None;
-    }
-    let mut i = 2;
-    let mut frame: Option<Frame> = None;
-    loop {
+/// Whether marker `m` starts a frame header (SOF0–SOF15; not DHT, DAC or JPG).
+pub(crate) fn is_frame_header(m: u8) -> bool {
+    (0xC0..=0xCF).contains(&m) && m != 0xC4 && m != 0xC8 && m != 0xCC
+}
+
+/// The marker segments of a JPEG's headers, up to and including the first
+/// scan header: (marker, offset of the marker's 0xFF, segment body). It ends
+/// early, without an error, where the bytes are not a well-formed segment.
+pub(crate) fn header_segments(b: &[u8]) -> impl Iterator<Item = (u8, usize, &[u8])> {
+    let mut i = if b.get(..2) == Some(&[0xFF, 0xD8][..]) {
+        2
+    } else {
+        usize::MAX
+    };
+    std::iter::from_fn(move || {
         // Fill bytes (FF FF …) may precede a marker.
         while *b.get(i)? == 0xFF && *b.get(i + 1)? == 0xFF {
             i += 1;
@@ -75,32 +81,40 @@ fn frame_facts(b: &[u8]) -> Option<Frame> {
         let m = *b.get(i + 1)?;
         let len = u16::from_be_bytes([*b.get(i + 2)?, *b.get(i + 3)?]) as usize;
         let seg = b.get(i + 4..i + 2 + len)?;
-        match m {
-            0xC0..=0xCF if m != 0xC4 && m != 0xC8 && m != 0xCC => {
-                let n = *seg.get(5)? as usize;
-                let v_max = (0..n)
-                    .map(|c| seg.get(7 + 3 * c).map(|s| (s & 0x0F) as usize))
-                    .collect::<Option<Vec<_>>>()?
-                    .into_iter()
-                    .max()?;
-                frame = Some(Frame {
-                    height_at: i + 5,
-                    height: u16::from_be_bytes([*seg.get(1)?, *seg.get(2)?]) as usize,
-                    components: n,
-                    v_max: v_max.max(1),
-                    sequential: m == 0xC0 || m == 0xC1,
-                    first_scan: 0,
-                });
-            }
-            0xDA => {
-                let mut f = frame?;
-                f.first_scan = *seg.first()? as usize;
-                return Some(f);
-            }
-            _ => {}
+        let at = i;
+        // After the scan header the entropy-coded data follows: stop there.
+        i = if m == 0xDA { usize::MAX } else { i + 2 + len };
+        Some((m, at, seg))
+    })
+}
+
+/// The frame facts a cut needs, from the headers up to the first scan;
+/// `None` when they are not what a cut needs (the whole file is then decoded).
+fn frame_facts(b: &[u8]) -> Option<Frame> {
+    let mut frame: Option<Frame> = None;
+    for (m, i, seg) in header_segments(b) {
+        if is_frame_header(m) {
+            let n = *seg.get(5)? as usize;
+            let v_max = (0..n)
+                .map(|c| seg.get(7 + 3 * c).map(|s| (s & 0x0F) as usize))
+                .collect::<Option<Vec<_>>>()?
+                .into_iter()
+                .max()?;
+            frame = Some(Frame {
+                height_at: i + 5,
+                height: u16::from_be_bytes([*seg.get(1)?, *seg.get(2)?]) as usize,
+                components: n,
+                v_max: v_max.max(1),
+                sequential: m == 0xC0 || m == 0xC1,
+                first_scan: 0,
+            });
+        } else if m == 0xDA {
+            let mut f = frame?;
+            f.first_scan = *seg.first()? as usize;
+            return Some(f);
         }
-        i += 2 + len;
     }
+    None
 }
 
 /// The height to decode to for `rows` needed rows, when that is less than the frame.

@@ -19,48 +19,32 @@ const IJG_LUMA: [u16; 64] = [
 /// component of the first frame (luma in YCbCr and grey JPEGs); None when the
 /// headers do not give one before the first scan.
 pub fn luma_table(b: &[u8]) -> Option<[u16; 64]> {
-    if b.get(..2)? != [0xFF, 0xD8] {
-        return None;
-    }
     let mut tables: [Option<[u16; 64]>; 4] = [None; 4];
     let mut first_component_table: Option<usize> = None;
-    let mut i = 2;
-    loop {
-        while *b.get(i)? == 0xFF && *b.get(i + 1)? == 0xFF {
-            i += 1;
-        }
-        if *b.get(i)? != 0xFF {
-            return None;
-        }
-        let m = *b.get(i + 1)?;
-        let len = u16::from_be_bytes([*b.get(i + 2)?, *b.get(i + 3)?]) as usize;
-        let seg = b.get(i + 4..(i + 2 + len).max(i + 4))?;
-        match m {
-            0xDB => {
-                let mut k = 0;
-                while k < seg.len() {
-                    let (pq, tq) = ((seg[k] >> 4) as usize, (seg[k] & 0x0F) as usize);
-                    k += 1;
-                    let mut t = [0u16; 64];
-                    for z in ZIGZAG {
-                        t[z] = if pq == 0 {
-                            *seg.get(k)? as u16
-                        } else {
-                            u16::from_be_bytes([*seg.get(k)?, *seg.get(k + 1)?])
-                        };
-                        k += 1 + pq.min(1);
-                    }
-                    *tables.get_mut(tq)? = Some(t);
+    for (m, _, seg) in super::jpeg::header_segments(b) {
+        if m == 0xDB {
+            let mut k = 0;
+            while k < seg.len() {
+                let (pq, tq) = ((seg[k] >> 4) as usize, (seg[k] & 0x0F) as usize);
+                k += 1;
+                let mut t = [0u16; 64];
+                for z in ZIGZAG {
+                    t[z] = if pq == 0 {
+                        *seg.get(k)? as u16
+                    } else {
+                        u16::from_be_bytes([*seg.get(k)?, *seg.get(k + 1)?])
+                    };
+                    k += 1 + pq.min(1);
                 }
+                *tables.get_mut(tq)? = Some(t);
             }
-            0xC0..=0xCF if m != 0xC4 && m != 0xC8 && m != 0xCC => {
-                first_component_table = Some(*seg.get(8)? as usize & 0x0F);
-            }
-            0xDA => return *tables.get(first_component_table?)?,
-            _ => {}
+        } else if super::jpeg::is_frame_header(m) {
+            first_component_table = Some(*seg.get(8)? as usize & 0x0F);
+        } else if m == 0xDA {
+            return *tables.get(first_component_table?)?;
         }
-        i += 2 + len;
     }
+    None
 }
 
 /// The IJG quality (1–100) whose scaled standard luma table is nearest to

@@ -109,6 +109,36 @@ pub fn demo_target_for(
     Ok(t)
 }
 
+/// A long thin card (260×40 mm, white): one log sweep of contrast 0.8 and
+/// mean 0.45, 240×20 mm, from `f_min_cy_mm` to `f_max_cy_mm` along its
+/// length; no fiducials (measured from its strip's corners).
+pub fn strip_card(f_min_cy_mm: f64, f_max_cy_mm: f64) -> Target {
+    Target {
+        name: "strip".into(),
+        width_mm: 260.0,
+        height_mm: 40.0,
+        background: 1.0,
+        sweeps: vec![Sweep {
+            id: "main".into(),
+            rect: Rect {
+                x_mm: 10.0,
+                y_mm: 10.0,
+                width_mm: 240.0,
+                height_mm: 20.0,
+            },
+            direction: Direction::X,
+            law: SweepLaw::Log,
+            f_min_cy_mm,
+            f_max_cy_mm,
+            mean: 0.45,
+            contrast: 0.8,
+        }],
+        patches: vec![],
+        greys: vec![],
+        fiducials: vec![],
+    }
+}
+
 /// An isotropic Gaussian point spread function of standard deviation `sigma_mm`
 /// on the sensor: OTF = exp(−2π²σ²(u² + v²)), real and positive.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -11,37 +11,8 @@ use sweepmtf::geometry::Point;
 use sweepmtf::measure::{DistortionSource, MeasureOptions, Measurement, measure_decoded};
 use sweepmtf::model::System;
 use sweepmtf::photo::decode::decode_bytes;
-use sweepmtf::simulate::demo::GaussianPsf;
+use sweepmtf::simulate::demo::{GaussianPsf, strip_card};
 use sweepmtf::simulate::{Camera, Shot, encode::PhotoFormat, render};
-use sweepmtf::target::{Direction, Rect, Sweep, SweepLaw, Target};
-
-/// A long thin chart: one log sweep 240×20 mm on a white 260×40 mm card.
-fn strip_target(f_min_cy_mm: f64, f_max_cy_mm: f64) -> Target {
-    Target {
-        name: "strip".into(),
-        width_mm: 260.0,
-        height_mm: 40.0,
-        background: 1.0,
-        sweeps: vec![Sweep {
-            id: "main".into(),
-            rect: Rect {
-                x_mm: 10.0,
-                y_mm: 10.0,
-                width_mm: 240.0,
-                height_mm: 20.0,
-            },
-            direction: Direction::X,
-            law: SweepLaw::Log,
-            f_min_cy_mm,
-            f_max_cy_mm,
-            mean: 0.45,
-            contrast: 0.8,
-        }],
-        patches: vec![],
-        greys: vec![],
-        fiducials: vec![],
-    }
-}
 
 /// A shot geometry: frame, chart width in the frame (px), offset of its centre, rotation.
 #[derive(Clone, Copy)]
@@ -72,7 +43,7 @@ const LEFT: Geometry = Geometry {
 /// shot noise (SNR ≈ 100 at the strip's mean), 8-bit sRGB PNG.
 fn shoot(g: Geometry, distortion: Option<Ptlens>, seed: u64) -> (Shot, Vec<u8>) {
     let px_per_mm = g.chart_px / 260.0;
-    let t = strip_target(0.006 * px_per_mm, 0.6 * px_per_mm);
+    let t = strip_card(0.006 * px_per_mm, 0.6 * px_per_mm);
     let camera = Camera {
         width_px: g.size.0,
         height_px: g.size.1,
