@@ -223,15 +223,28 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
         .filter(|(b0, b1)| b1 > b0)
         .collect();
     let hair = 1e-6 * bin;
-    let parts: Vec<(Vec<BinAcc>, [usize; 3])> = runs
-        .par_iter()
-        .map(|&(b0, b1)| {
+    // One vector for every bin, made in parallel (its pages fault in on both
+    // cores), and each run bins straight into its own slice of it: no piece
+    // is copied into place afterwards (that copy was 2.5 MB a 5600 px strip).
+    let mut acc: Vec<BinAcc> = (0..nbins)
+        .into_par_iter()
+        .map(|_| BinAcc::default())
+        .collect();
+    let mut pieces = Vec::with_capacity(runs.len());
+    let mut rest = &mut acc[b_first..b_end];
+    for &(b0, b1) in &runs {
+        let (own, tail) = std::mem::take(&mut rest).split_at_mut(b1 - b0);
+        pieces.push((b0, b1, own));
+        rest = tail;
+    }
+    let counts: Vec<[usize; 3]> = pieces
+        .into_par_iter()
+        .map(|(b0, b1, acc)| {
             let piece = Region {
                 s_lo: s_lo.max(b0 as f64 * bin - hair),
                 s_hi: s_hi.min(b1 as f64 * bin + hair),
                 ..region
             };
-            let mut acc = vec![BinAcc::default(); b1 - b0];
             let mut count = [0usize; 3];
             for band in piece.bands() {
                 piece.visit_band(&band, |b, s, v| {
@@ -243,16 +256,13 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
                     }
                 });
             }
-            (acc, count)
+            count
         })
         .collect();
-    let mut acc = vec![BinAcc::default(); b_first];
     let mut count = [0usize; 3];
-    for (part, c) in parts {
-        acc.extend(part);
+    for c in counts {
         count.iter_mut().zip(c).for_each(|(x, y)| *x += y);
     }
-    acc.resize(nbins, BinAcc::default());
     prof.samples = count[0];
     prof.clipped_high = count[1];
     prof.clipped_low = count[2];
