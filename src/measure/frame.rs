@@ -352,14 +352,14 @@ fn coarse_jpeg_quality(dec: &Decoded) -> Option<f64> {
 }
 
 /// The warning for a coarse JPEG. Simulated q75 shots: ripples of ±0.015 at
-/// 0.25–0.45 cy/px (smoothed out, [`super::strip`]), and a loss of up to
-/// 1 % at 0.3 cy/px when the sweep is tilted 1–3° to the block grid (small
-/// across-block phase terms are rounded to zero); q90 moves MTF50 by less
-/// than 0.05 %.
+/// 0.25–0.45 cy/px (smoothed out, [`super::strip`]), and MTF50 off the
+/// optics' by −1.1…+1.1 %, with no trend in exposure, light colour or the
+/// sweep's angle to the block grid (the README's "Coarse JPEGs"); q90 moves
+/// MTF50 by less than 0.05 %.
 fn coarse_jpeg_warning(q: f64) -> String {
     format!(
         "JPEG quality ≈ {q:.0} (luma table): its 8×8 block quantisation is part of this MTF \
-         (simulated q75: up to 1.1 % lower MTF50 than the optics'; its ripple is smoothed over \
-         σ = 0.01 cy/px); shoot at quality ≥ 90 or raw for the lens's own MTF"
+         (simulated q75: MTF50 within ±1.1 % of the optics', either way; its ripple is smoothed \
+         over σ = 0.01 cy/px); shoot at quality ≥ 90 or raw for the lens's own MTF"
     )
 }

@@ -15,7 +15,7 @@ mod region;
 use crate::distortion::Lens;
 use crate::geometry::{Homography, Point};
 use crate::photo::{Plane, PlaneRef};
-use acc::{BinAcc, EXTREMES};
+use acc::BinAcc;
 pub(crate) use lens::photo_outline;
 use rayon::prelude::*;
 use region::Region;
@@ -205,39 +205,18 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
         length: strip.length,
         ..Profile::default()
     };
-    // First pass in parallel, split along the sweep into PASS_CHUNKS runs of
-    // bins: each piece owns its bins (no merging, and the same split on any
-    // machine, so results do not depend on threads). A piece visits the
-    // region narrowed to its s-range (plus a hair, so no sample at a boundary
-    // is lost to rounding) and keeps only the samples of its own bins.
-    let b_first = ((s_lo / bin) as usize).min(nbins - 1);
-    let b_end = ((s_hi / bin) as usize + 1).min(nbins);
-    let runs: Vec<(usize, usize)> = (0..PASS_CHUNKS)
-        .map(|k| {
-            let n = b_end - b_first;
-            (
-                b_first + n * k / PASS_CHUNKS,
-                b_first + n * (k + 1) / PASS_CHUNKS,
-            )
-        })
-        .filter(|(b0, b1)| b1 > b0)
-        .collect();
+    // First pass in parallel, split along the sweep into runs of bins
+    // ([`own_runs`]): each run fills its own slice of one vector of every
+    // bin (made in parallel, so its pages fault in on both cores; nothing is
+    // merged or copied into place). A run visits the region narrowed to its
+    // s-range (plus a hair, so no sample at a boundary is lost to rounding)
+    // and keeps only the samples of its own bins.
     let hair = 1e-6 * bin;
-    // One vector for every bin, made in parallel (its pages fault in on both
-    // cores), and each run bins straight into its own slice of it: no piece
-    // is copied into place afterwards (that copy was 2.5 MB a 5600 px strip).
     let mut acc: Vec<BinAcc> = (0..nbins)
         .into_par_iter()
         .map(|_| BinAcc::default())
         .collect();
-    let mut pieces = Vec::with_capacity(runs.len());
-    let mut rest = &mut acc[b_first..b_end];
-    for &(b0, b1) in &runs {
-        let (own, tail) = std::mem::take(&mut rest).split_at_mut(b1 - b0);
-        pieces.push((b0, b1, own));
-        rest = tail;
-    }
-    let counts: Vec<[usize; 3]> = pieces
+    let counts: Vec<[usize; 3]> = own_runs(&mut acc, s_lo, s_hi, bin)
         .into_par_iter()
         .map(|(b0, b1, acc)| {
             let piece = Region {
@@ -267,35 +246,9 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
     prof.clipped_high = count[1];
     prof.clipped_low = count[2];
     // Robust mean: drop samples more than 3σ (and more than a small floor)
-    // from the bin mean. Each bin kept its EXTREMES most extreme samples on
-    // either side, so the clipped sums need no second visit unless a bin has
-    // that many outliers on one side (dust, a speck): only such bins are
-    // visited again.
-    let mut revisit = Vec::new();
-    for (b, a) in acc.iter_mut().enumerate() {
-        if a.n < 4 {
-            continue;
-        }
-        let (mu, lim) = a.clip_limits();
-        let out_hi = a.hi[..EXTREMES]
-            .iter()
-            .filter(|&&v| v as f64 - mu > lim)
-            .count();
-        let out_lo = a.lo[..EXTREMES]
-            .iter()
-            .filter(|&&v| mu - v as f64 > lim)
-            .count();
-        if out_hi == EXTREMES || out_lo == EXTREMES {
-            revisit.push((b, mu, lim));
-            continue;
-        }
-        a.rsum = a.sum;
-        a.rn = a.n;
-        for &v in a.hi[..out_hi].iter().chain(&a.lo[..out_lo]) {
-            a.rsum -= v as f64;
-            a.rn -= 1;
-        }
-    }
+    // from the bin mean, from each bin's kept extremes; only bins with that
+    // many outliers on one side (dust, a speck) are visited again.
+    let revisit = acc::robust_from_extremes(&mut acc);
     if !revisit.is_empty() {
         let mut keep = vec![None; nbins];
         for &(b, mu, lim) in &revisit {
@@ -337,6 +290,36 @@ fn positive_inverse(strip: &Strip, inv: [f64; 9]) -> [f64; 9] {
 
 /// How many runs of bins the first binning pass is split into (run in parallel).
 const PASS_CHUNKS: usize = 8;
+
+/// The bins of `acc` from the one holding `s_lo` to the one holding `s_hi`
+/// (strip units; bins `bin` wide), split into [`PASS_CHUNKS`] runs: (first
+/// bin, end bin, the run's own bins). The same split on any machine, so
+/// results do not depend on threads.
+fn own_runs(
+    acc: &mut [BinAcc],
+    s_lo: f64,
+    s_hi: f64,
+    bin: f64,
+) -> Vec<(usize, usize, &mut [BinAcc])> {
+    let nbins = acc.len();
+    let b_first = ((s_lo / bin) as usize).min(nbins - 1);
+    let b_end = ((s_hi / bin) as usize + 1).min(nbins);
+    let mut rest = &mut acc[b_first..b_end];
+    let mut runs = Vec::with_capacity(PASS_CHUNKS);
+    let n = b_end - b_first;
+    for k in 0..PASS_CHUNKS {
+        let (b0, b1) = (
+            b_first + n * k / PASS_CHUNKS,
+            b_first + n * (k + 1) / PASS_CHUNKS,
+        );
+        let (own, tail) = std::mem::take(&mut rest).split_at_mut(b1 - b0);
+        if b1 > b0 {
+            runs.push((b0, b1, own));
+        }
+        rest = tail;
+    }
+    runs
+}
 
 #[cfg(test)]
 mod tests {
@@ -416,8 +399,9 @@ mod tests {
         }
     }
 
-    /// The plain definition: every sample centre through the inverse
-    /// homography, two passes, 3σ clip about each bin's plain mean.
+    /// The plain definition: every sample centre through the lens's exact
+    /// undistortion (if any) and the inverse homography, two passes, 3σ clip
+    /// about each bin's plain mean.
     fn brute(plane: &Plane, strip: &Strip, o: &BinOptions) -> Vec<(f64, f64, f64)> {
         let inv = strip.to_image.inverse().unwrap();
         let m = o.margin;
@@ -432,6 +416,10 @@ mod tests {
             for i in 0..plane.width {
                 let x = (plane.offset.0 + i * plane.step.0) as f64 + 0.5;
                 let y = (plane.offset.1 + j * plane.step.1) as f64 + 0.5;
+                let [x, y] = match &strip.lens {
+                    Some(l) => l.undistort([x, y]),
+                    None => [x, y],
+                };
                 let [s, t] = inv.apply([x, y]);
                 if t >= m * strip.width
                     && t <= (1.0 - m) * strip.width
@@ -464,6 +452,73 @@ mod tests {
                 )
             })
             .collect()
+    }
+
+    #[test]
+    fn bins_through_a_lens_equal_the_plain_definition() {
+        // A strip near a frame edge through strong barrel and pincushion
+        // (its edges bow by pixels), noise with dust: every bin as the brute
+        // force through the exact undistortion gives it.
+        let (w, h) = (400, 300);
+        for b in [-0.06, 0.05] {
+            let lens = Lens::new(
+                crate::distortion::Ptlens {
+                    a: 0.01,
+                    b,
+                    c: -0.01,
+                },
+                w,
+                h,
+            );
+            lens.check().unwrap();
+            let quad = [[15.0, 200.0], [385.0, 205.0], [380.0, 290.0], [20.0, 285.0]];
+            let mut strip = strip_for(quad, 370.0, 85.0);
+            strip.lens = Some(lens);
+            let mut st = 777u64;
+            let mut rnd = || {
+                st = st
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (st >> 11) as f64 / (1u64 << 53) as f64
+            };
+            let data = (0..w * h)
+                .map(|k| {
+                    let (x, y) = ((k % w) as f64, (k / w) as f64);
+                    let dust = (x - 200.0).hypot(y - 250.0) < 6.0;
+                    if dust {
+                        0.01
+                    } else {
+                        (0.5 + 0.3 * (0.004 * x * x).sin() + 0.03 * (rnd() - 0.5)) as f32
+                    }
+                })
+                .collect();
+            let plane = Plane::full(w, h, data);
+            for bin_px in [0.25, 2.0] {
+                let o = BinOptions {
+                    bin_px,
+                    ..BinOptions::default()
+                };
+                let p = bin_plane(&plane, &strip, &o);
+                let want = brute(&plane, &strip, &o);
+                assert_eq!(
+                    p.s.len(),
+                    want.len(),
+                    "b {b} bin {bin_px}: {} {}",
+                    p.s.len(),
+                    want.len()
+                );
+                for k in 0..want.len() {
+                    assert!((p.s[k] - want[k].0).abs() < 1e-9, "{b} {bin_px} {k}");
+                    assert!(
+                        (p.y[k] - want[k].1).abs() < 1e-9,
+                        "{b} {bin_px} {k}: {} vs {}",
+                        p.y[k],
+                        want[k].1
+                    );
+                    assert_eq!(p.count[k], want[k].2, "{b} {bin_px} {k}");
+                }
+            }
+        }
     }
 
     #[test]
