@@ -4,7 +4,7 @@
 //! renderers' exact truth.
 //!
 //! Run: `cargo run --release --features examples --example unseen [-- N [-v]]`
-//! (N shots of each kind, default 20: ≈ 1 min; `-v` lists the JPEG shots).
+//! (N shots of each kind, default 20: ≈ 1.5 min; `-v` lists the JPEG shots).
 //! Prints one row per kind: shots, failures of the bars, worst RMS
 //! |MTF − truth| over 0.01–0.45 cy/px, the range of the MTF50 error and of
 //! the chart modulation's error (printed 0.800).
@@ -14,7 +14,10 @@
 //! simulator's strip photographed through radial distortion (−4…+4 % at the
 //! frame corner, a, b, c mixed, near a random frame edge, turned ±2°); and
 //! the camera simulator's coloured-light RGB JPEG q75 4:2:0 at turns of
-//! 0–5° to the block grid.
+//! 0–5° to the block grid; and everything at once (radial distortion ±3 %,
+//! a perspective tilt up to 15°, 50 % fall-off and a 2:1 light gradient,
+//! unsharp-mask sharpening, coloured light, RGB JPEG q85 or q75 4:2:0,
+//! turned ±1.5°, near a random long edge).
 
 use sweepmtf::distortion::{Lens, Ptlens};
 use sweepmtf::measure::synth::nuisance_cases;
@@ -22,7 +25,7 @@ use sweepmtf::measure::{MeasureOptions, measure_decoded};
 use sweepmtf::model::System;
 use sweepmtf::photo::decode::decode_bytes;
 use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for, strip_card};
-use sweepmtf::simulate::{Camera, PhotoFormat, Shot, TruthRow, render};
+use sweepmtf::simulate::{Camera, LightGradient, PhotoFormat, Sharpen, Shot, TruthRow, render};
 use sweepmtf::target::{SweepLaw, Target};
 
 /// (RMS, MTF50 relative error, chart modulation relative error) of one shot.
@@ -201,6 +204,56 @@ fn distorted(k: u64, u: &mut Lcg) -> Result<Score, String> {
     score(&bytes, roi_of(&shot), &|f| truth_at(rows, f))
 }
 
+/// Every nuisance at once, stored as RGB JPEG at `quality`: the strip near
+/// the top or bottom edge through radial distortion (−3…+3 % at the corner),
+/// a perspective tilt of 0–15° about the vertical axis, 50 % fall-off and a
+/// 2:1 light gradient in a random direction, unsharp-mask sharpening,
+/// coloured light, 4:2:0 chroma, turned ±1.5°.
+fn everything(k: u64, u: &mut Lcg, quality: u8) -> Result<Score, String> {
+    let (w, h) = (1400usize, 950usize);
+    let chart_px = 0.9 * w as f64;
+    let edge = 0.5 * h as f64 - 0.5 * 40.0 / 260.0 * chart_px - (20.0 + 60.0 * u.next());
+    let offset = if u.next() < 0.5 {
+        [0.0, edge]
+    } else {
+        [0.0, -edge]
+    };
+    let rc2 = ((w * w + h * h) as f64) / ((h * h) as f64);
+    let b = (-3.0 + 6.0 * u.next()) / 100.0 / (rc2 - 1.0);
+    let cam = Camera {
+        width_px: w,
+        height_px: h,
+        chart_px: Some(chart_px),
+        offset_px: offset,
+        rotate_deg: 3.0 * (u.next() - 0.5),
+        tilt_deg: 15.0 * u.next(),
+        tilt_axis_deg: 90.0,
+        distortion: Some(Ptlens { a: 0.0, b, c: 0.0 }),
+        falloff: 0.5,
+        light_gradient: Some(LightGradient {
+            ratio: 2.0,
+            toward_deg: 360.0 * u.next(),
+        }),
+        sharpen: Some(Sharpen {
+            amount: 0.4,
+            radius_px: 1.5,
+        }),
+        light_colour: Some([1.0, 0.85, 0.65]),
+        jpeg_quality: Some(quality),
+        full_well_e: Some(20_000.0),
+        read_noise_e: 3.0,
+        seed: 900 + k,
+        ..Camera::default()
+    };
+    let sigma = 0.5 + 0.2 * u.next();
+    let px_per_mm = chart_px / 260.0;
+    let t = strip_card(0.006 * px_per_mm, 0.6 * px_per_mm);
+    let shot = shoot(&t, &cam, sigma)?;
+    let bytes = shot.encode(PhotoFormat::Jpeg).map_err(|e| e.to_string())?;
+    let rows = &shot.truth().ok_or("no truth")?.rows;
+    score(&bytes, roi_of(&shot), &|f| truth_at(rows, f))
+}
+
 /// Renders target `t` with camera `cam` through a Gaussian lens of `sigma_px`.
 fn shoot(t: &Target, cam: &Camera, sigma_px: f64) -> Result<Shot, String> {
     let system = System {
@@ -291,6 +344,22 @@ fn main() {
         }
     }
     kinds.push(jpeg);
+    for quality in [85, 75] {
+        let mut all = Kind::new(
+            &format!(
+                "camera: everything at once (distortion ±3 %, tilt ≤ 15°, light, USM, RGB JPEG q{quality})"
+            ),
+            0.012,
+        );
+        let mut u = Lcg(0xc0b0 + quality as u64);
+        for k in 0..n {
+            match everything(k, &mut u, quality) {
+                Ok(s) => all.scores.push(s),
+                Err(e) => all.errors.push(e),
+            }
+        }
+        kinds.push(all);
+    }
     println!(
         "| kind | shots | failing a bar | worst RMS (bar) | MTF50 error | chart modulation error |"
     );
