@@ -223,6 +223,7 @@ mod tests {
             aliasing_from_cy_px: None,
             clipped_fraction: 0.0,
             region_px: [[0.0; 2]; 4],
+            outline_px: Vec::new(),
             alias_line_px: None,
             measured_lines_px: [[[0.0; 2]; 2]; 2],
         }

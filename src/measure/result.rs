@@ -101,6 +101,11 @@ pub struct Curve {
     pub clipped_fraction: f64,
     /// Image corners of the binned region.
     pub region_px: [Point; 4],
+    /// The binned region's outline in the photo (a closed polyline, px) when
+    /// a lens model bends its long edges; empty when they are straight (the
+    /// quad `region_px` is the outline then). Drawn, not serialised.
+    #[serde(skip)]
+    pub outline_px: Vec<Point>,
     /// Image segment across the strip where aliasing starts.
     pub alias_line_px: Option<[Point; 2]>,
     /// Image segment across the strip at the lowest and highest measured points.

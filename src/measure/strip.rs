@@ -273,6 +273,14 @@ pub(super) fn measure_strip(
         aliasing_from_cy_px: aliasing_from,
         clipped_fraction: clipped,
         region_px: strip.image_quad(opts.margin * strip.width, (1.0 - opts.margin) * strip.width),
+        outline_px: match strip.lens {
+            Some(_) => super::profile::photo_outline(
+                strip,
+                opts.margin * strip.width,
+                (1.0 - opts.margin) * strip.width,
+            ),
+            None => Vec::new(),
+        },
         alias_line_px: alias_line,
         measured_lines_px: [across(s_first), across(s_last)],
     })

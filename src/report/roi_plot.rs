@@ -62,7 +62,14 @@ pub fn roi_plot(m: &Measurement) -> Result<Vec<u8>, ReportError> {
                 .map_err(err)?;
         }
         for c in &m.curves {
-            root.draw(&PathElement::new(quad(&c.region_px), cyan.stroke_width(1)))
+            let outline = if c.outline_px.is_empty() {
+                quad(&c.region_px)
+            } else {
+                let mut v: Vec<_> = c.outline_px.iter().map(|&p| to(p)).collect();
+                v.push(v[0]);
+                v
+            };
+            root.draw(&PathElement::new(outline, cyan.stroke_width(1)))
                 .map_err(err)?;
             for l in &c.measured_lines_px {
                 root.draw(&PathElement::new(
