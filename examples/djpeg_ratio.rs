@@ -8,7 +8,8 @@
 //! ```
 //! `make` writes `wide.jpg` (a 5200×1700 px strip, ≈ 37 % of the frame, q92,
 //! region given by `--roi`) and `target.jpg` (the simulator's A4 log target,
-//! 6000×4000, q92, region found from the fiducials) with their arguments.
+//! 6000×4000, q92, region found from the fiducials) with their arguments;
+//! `run` also times the wide strip binned through a lens model.
 //! `run` skips (exit 0 with a note) when `djpeg` is not installed;
 //! `SWEEPMTF_BIN=path` times another build of the CLI instead.
 //! Peak memory: `/usr/bin/time -v target/release/sweepmtf measure DIR/wide.jpg $(cat DIR/wide.args)`.
@@ -93,6 +94,9 @@ fn run(dir: &Path, pairs: usize) {
     for (name, extra) in [
         ("wide", vec![]),
         ("wide", vec!["--no-refine-roi"]),
+        // The cost of binning through a lens model (the shot itself is not
+        // distorted, so only the time means anything here).
+        ("wide", vec!["--distortion", "ptlens:b=-0.01"]),
         ("target", vec![]),
     ] {
         let photo = dir.join(format!("{name}.jpg"));
