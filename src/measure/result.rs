@@ -103,8 +103,9 @@ pub struct Curve {
     pub region_px: [Point; 4],
     /// The binned region's outline in the photo (a closed polyline, px) when
     /// a lens model bends its long edges; empty when they are straight (the
-    /// quad `region_px` is the outline then). Drawn, not serialised.
-    #[serde(skip)]
+    /// quad `region_px` is the outline then). Drawn in the region picture and
+    /// the GUI; not in the summary.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub outline_px: Vec<Point>,
     /// Image segment across the strip where aliasing starts.
     pub alias_line_px: Option<[Point; 2]>,

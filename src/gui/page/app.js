@@ -197,7 +197,9 @@ function drawOverlay() {
   const lw = 1.5 * s;
   if (M.result) {
     for (const c of M.result.curves) {
-      el("polygon", { points: c.region_px.map((p) => p.join(",")).join(" "), class: "binned", "stroke-width": lw }, g);
+      // Through a lens model the binned region's edges are curves (outline_px).
+      const outline = c.outline_px && c.outline_px.length ? c.outline_px : c.region_px;
+      el("polygon", { points: outline.map((p) => p.join(",")).join(" "), class: "binned", "stroke-width": lw }, g);
       for (const l of c.measured_lines_px) el("line", { x1: l[0][0], y1: l[0][1], x2: l[1][0], y2: l[1][1], class: "measured-line", "stroke-width": lw }, g);
       if (c.alias_line_px) { const l = c.alias_line_px; el("line", { x1: l[0][0], y1: l[0][1], x2: l[1][0], y2: l[1][1], class: "alias-line", "stroke-width": 2 * lw }, g); }
     }
