@@ -25,7 +25,7 @@ use sweepmtf::measure::{MeasureOptions, measure_decoded};
 use sweepmtf::model::System;
 use sweepmtf::photo::decode::decode_bytes;
 use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for, strip_card};
-use sweepmtf::simulate::{Camera, LightGradient, PhotoFormat, Sharpen, Shot, TruthRow, render};
+use sweepmtf::simulate::{Camera, LightGradient, PhotoFormat, Sharpen, Shot, mtf_at, render};
 use sweepmtf::target::{SweepLaw, Target};
 
 /// (RMS, MTF50 relative error, chart modulation relative error) of one shot.
@@ -72,15 +72,6 @@ impl Kind {
             range(|s| s.2)
         )
     }
-}
-
-/// The truth at `f` (cy/px), interpolated in a simulator's truth rows.
-fn truth_at(rows: &[TruthRow], f: f64) -> f64 {
-    let i = rows
-        .partition_point(|r| r.freq_cy_px < f)
-        .clamp(1, rows.len() - 1);
-    let (a, b) = (&rows[i - 1], &rows[i]);
-    a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
 }
 
 /// The first fall of `truth` through 0.5 (cy/px), by bisection on a 0.001 cy/px walk.
@@ -183,7 +174,6 @@ fn distorted(k: u64, u: &mut Lcg) -> Result<Score, String> {
         c: mix[2] * b,
     };
     Lens::new(model, w, h).check()?;
-    let px_per_mm = chart_px / 260.0;
     let cam = Camera {
         width_px: w,
         height_px: h,
@@ -196,12 +186,7 @@ fn distorted(k: u64, u: &mut Lcg) -> Result<Score, String> {
         seed: 500 + k,
         ..Camera::default()
     };
-    let sigma = 0.5 + 0.2 * u.next();
-    let t = strip_card(0.006 * px_per_mm, 0.6 * px_per_mm);
-    let shot = shoot(&t, &cam, sigma)?;
-    let bytes = shot.encode(PhotoFormat::Png).map_err(|e| e.to_string())?;
-    let rows = &shot.truth().ok_or("no truth")?.rows;
-    score(&bytes, roi_of(&shot), &|f| truth_at(rows, f))
+    strip_card_score(&cam, 0.5 + 0.2 * u.next(), PhotoFormat::Png)
 }
 
 /// Every nuisance at once, stored as RGB JPEG at `quality`: the strip near
@@ -245,13 +230,23 @@ fn everything(k: u64, u: &mut Lcg, quality: u8) -> Result<Score, String> {
         seed: 900 + k,
         ..Camera::default()
     };
-    let sigma = 0.5 + 0.2 * u.next();
-    let px_per_mm = chart_px / 260.0;
+    strip_card_score(&cam, 0.5 + 0.2 * u.next(), PhotoFormat::Jpeg)
+}
+
+/// The strip card (0.006–0.6 cycles per mm of a 260 mm chart, `cam.chart_px`
+/// wide) shot with `cam` through a Gaussian lens of `sigma_px`, stored as
+/// `format` and scored.
+fn strip_card_score(cam: &Camera, sigma_px: f64, format: PhotoFormat) -> Result<Score, String> {
+    let px_per_mm = cam.chart_px.ok_or("no chart size")? / 260.0;
     let t = strip_card(0.006 * px_per_mm, 0.6 * px_per_mm);
-    let shot = shoot(&t, &cam, sigma)?;
-    let bytes = shot.encode(PhotoFormat::Jpeg).map_err(|e| e.to_string())?;
+    score_shot(&shoot(&t, cam, sigma_px)?, format)
+}
+
+/// `shot` stored as `format`, measured from its strip corners and scored against its truth.
+fn score_shot(shot: &Shot, format: PhotoFormat) -> Result<Score, String> {
+    let bytes = shot.encode(format).map_err(|e| e.to_string())?;
     let rows = &shot.truth().ok_or("no truth")?.rows;
-    score(&bytes, roi_of(&shot), &|f| truth_at(rows, f))
+    score(&bytes, roi_of(shot), &|f| mtf_at(rows, f))
 }
 
 /// Renders target `t` with camera `cam` through a Gaussian lens of `sigma_px`.
@@ -280,9 +275,7 @@ fn jpeg_q75(turn_deg: f64, seed: u64) -> Result<Score, String> {
     };
     let t = demo_target_for(&cam, SweepLaw::Log, 0.006, 0.6).map_err(|e| e.to_string())?;
     let shot = shoot(&t, &cam, 0.55)?;
-    let bytes = shot.encode(PhotoFormat::Jpeg).map_err(|e| e.to_string())?;
-    let rows = &shot.truth().ok_or("no truth")?.rows;
-    score(&bytes, roi_of(&shot), &|f| truth_at(rows, f))
+    score_shot(&shot, PhotoFormat::Jpeg)
 }
 
 fn main() {

@@ -55,13 +55,7 @@ fn row(
     let m = measure_decoded(&dec, "shot.png", None, &opts).map_err(|e| e.to_string())?;
     let ms = t0.elapsed().as_secs_f64() * 1e3;
     let rows = &shot.truth().ok_or("no truth")?.rows;
-    let truth = |f: f64| {
-        let i = rows
-            .partition_point(|r| r.freq_cy_px < f)
-            .clamp(1, rows.len() - 1);
-        let (a, b) = (&rows[i - 1], &rows[i]);
-        a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
-    };
+    let truth = |f: f64| sweepmtf::simulate::mtf_at(rows, f);
     let c = &m.curves[0];
     let (mut se, mut n) = (0.0, 0);
     for p in c.points.iter().filter(|p| !p.aliased) {

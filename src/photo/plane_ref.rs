@@ -60,6 +60,17 @@ impl<'a> From<&'a Plane> for PlaneRef<'a> {
 }
 
 impl<'a> PlaneRef<'a> {
+    /// The image-pixel centre of sample (0, 0) and the lattice step, as
+    /// (ox, oy, sx, sy): sample (i, j) sits at (ox + i·sx, oy + j·sy).
+    pub fn centres(&self) -> (f64, f64, f64, f64) {
+        (
+            self.offset.0 as f64 + 0.5,
+            self.offset.1 as f64 + 0.5,
+            self.step.0 as f64,
+            self.step.1 as f64,
+        )
+    }
+
     /// The values of samples i0 .. i0 + out.len() of row j: a slice of the
     /// plane itself for linear data, else `out` filled with the converted codes.
     #[inline]

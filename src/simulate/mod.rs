@@ -31,7 +31,7 @@ pub use camera::{BayerOrder, Camera, Encoding, PixelAperture, RenderSettings};
 pub use demosaic::Demosaic;
 pub use encode::PhotoFormat;
 pub use nuisance::{Chroma, LightGradient, Sharpen};
-pub use truth::{PatchTruth, SweepTruth, TruthRow};
+pub use truth::{PatchTruth, SweepTruth, TruthRow, mtf_at};
 
 use crate::geometry::{Homography, rect_corners};
 use crate::model::System;

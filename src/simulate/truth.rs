@@ -42,6 +42,16 @@ pub struct TruthRow {
     pub print_mtf: Option<f64>,
 }
 
+/// The truth's MTF at `f` cycles/pixel: linear between `rows` (sorted by
+/// frequency, at least two), continued along the end segments beyond them.
+pub fn mtf_at(rows: &[TruthRow], f: f64) -> f64 {
+    let i = rows
+        .partition_point(|r| r.freq_cy_px < f)
+        .clamp(1, rows.len() - 1);
+    let (a, b) = (&rows[i - 1], &rows[i]);
+    a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
+}
+
 /// The truth of one sweep strip.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SweepTruth {

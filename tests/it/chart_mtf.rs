@@ -141,7 +141,7 @@ fn score(shot: &Shot, m: &Measurement, chart: &ChartMtf) -> (f64, usize, usize, 
     let (mut se, mut se_raw, mut n, mut wrong) = (0.0, 0.0, 0, 0);
     for (i, p) in c.points.iter().enumerate() {
         let pm = print_mtf(p.freq_chart);
-        let t = crate::csv_support::rows_truth_at(truth, p.freq_cy_px);
+        let t = sweepmtf::simulate::mtf_at(truth, p.freq_cy_px);
         if pm < 0.29 && cc.flag[i] == ChartFlag::Ok {
             wrong += 1;
         }
@@ -274,7 +274,7 @@ fn without_a_target_the_printed_strip_length_gives_the_scale() {
             if cc.flag[i] == ChartFlag::Ok {
                 assert!(print_mtf(fc) > 0.29, "{src}: {fc} cy/mm given");
                 if print_mtf(fc) >= 0.3 {
-                    let t = crate::csv_support::rows_truth_at(truth, p.freq_cy_px);
+                    let t = sweepmtf::simulate::mtf_at(truth, p.freq_cy_px);
                     se += (cc.camera_mtf[i] - t).powi(2);
                     n += 1;
                 }
@@ -313,7 +313,7 @@ fn dot_print_compensation() {
                 assert_ne!(cc.flag[i], ChartFlag::Ok, "{src}: {} cy/mm", p.freq_chart);
             }
             if cc.flag[i] == ChartFlag::Ok && pm >= 0.3 {
-                let t = crate::csv_support::rows_truth_at(truth, p.freq_cy_px);
+                let t = sweepmtf::simulate::mtf_at(truth, p.freq_cy_px);
                 se += (cc.camera_mtf[i] - t).powi(2);
                 n += 1;
             }
@@ -451,7 +451,7 @@ fn cli_scan_then_camera() {
                 let ch: f64 = r["chart_mtf"].parse().unwrap();
                 assert!(ch >= 0.3 && r["camera_mtf_err"].parse::<f64>().unwrap() > 0.0);
                 assert!(print_mtf(fc) > 0.29, "{r:?}");
-                se += (v - crate::csv_support::rows_truth_at(truth, f)).powi(2);
+                se += (v - sweepmtf::simulate::mtf_at(truth, f)).powi(2);
                 ok += 1;
             }
             "chart_below_floor" | "outside_chart_file" => {
@@ -543,7 +543,7 @@ fn cli_scan_then_camera() {
     for r in rows.iter().filter(|r| r["chart_flag"] == "ok") {
         let f: f64 = r["freq_cy_px"].parse().unwrap();
         let v: f64 = r["camera_mtf"].parse().unwrap();
-        se += (v - crate::csv_support::rows_truth_at(truth, f)).powi(2);
+        se += (v - sweepmtf::simulate::mtf_at(truth, f)).powi(2);
         n += 1;
     }
     let rms = (se / n as f64).sqrt();

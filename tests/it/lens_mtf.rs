@@ -120,7 +120,7 @@ fn square_pixel_divisor_gives_the_optics_within_0_01_rms() {
         let (sys_rms, _, _) = {
             let c = &m.curves[0];
             let truth = &shot.truth().unwrap().rows;
-            let at = |f: f64| crate::csv_support::rows_truth_at(truth, f);
+            let at = |f: f64| sweepmtf::simulate::mtf_at(truth, f);
             let v: Vec<f64> = c
                 .points
                 .iter()

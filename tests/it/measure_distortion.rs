@@ -87,7 +87,7 @@ struct Score {
 }
 
 fn truth_at(shot: &Shot, f: f64) -> f64 {
-    crate::csv_support::rows_truth_at(&shot.truth().unwrap().rows, f)
+    sweepmtf::simulate::mtf_at(&shot.truth().unwrap().rows, f)
 }
 
 fn truth_mtf50(shot: &Shot) -> f64 {

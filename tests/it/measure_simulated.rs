@@ -57,7 +57,7 @@ fn shoot(case: &Case) -> (Shot, Target, Vec<u8>) {
 /// (RMS |MTF − truth|, largest relative frequency error, points used).
 fn score(shot: &Shot, m: &sweepmtf::measure::Measurement) -> (f64, f64, usize) {
     let truth = &shot.truth().unwrap().rows;
-    let at = |f: f64| crate::csv_support::rows_truth_at(truth, f);
+    let at = |f: f64| sweepmtf::simulate::mtf_at(truth, f);
     let c = &m.curves[0];
     let (mut se, mut n) = (0.0, 0);
     for p in c.points.iter().filter(|p| !p.aliased) {

@@ -41,7 +41,7 @@ fn shoot(cam: &Camera) -> Shot {
 
 /// The truth at `f` cy/px, interpolated in the simulator's truth rows.
 fn truth_at(shot: &Shot, f: f64) -> f64 {
-    crate::csv_support::rows_truth_at(&shot.truth().unwrap().rows, f)
+    sweepmtf::simulate::mtf_at(&shot.truth().unwrap().rows, f)
 }
 
 /// (RMS, MTF50 relative error, chart modulation, measured peak) of the shot encoded as `format`.

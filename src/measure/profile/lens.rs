@@ -2,6 +2,7 @@
 //! every sample centre is undistorted before the inverse homography.
 
 use super::acc::BinAcc;
+use super::region::TILE;
 use super::{Profile, Strip};
 use crate::distortion::Lens;
 use crate::geometry::Point;
@@ -171,8 +172,7 @@ impl Map<'_> {
         };
         for tile in tiles.iter().filter(meets) {
             let plane = planes[tile.plane];
-            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            let (ox, oy, sx, sy) = plane.centres();
             for (dj, &(i0, i1)) in tile.rows.iter().enumerate() {
                 if i0 >= i1 {
                     continue;
@@ -261,9 +261,6 @@ impl<'a> Undistort<'a> {
     }
 }
 
-/// Rows and columns of a tile.
-const TILE: usize = 64;
-
 /// Up to TILE rows × TILE samples of one plane inside the outline, and the
 /// strip positions its samples can have.
 struct Tile {
@@ -289,8 +286,7 @@ fn tiles(planes: &[PlaneRef], outline: &[Point], map: &Map, bin: f64) -> Vec<Til
         + 1.0;
     let mut bands = Vec::new();
     for (p, plane) in planes.iter().enumerate() {
-        let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-        let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+        let (ox, oy, sx, sy) = plane.centres();
         let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
         let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
         let spans: Vec<(usize, usize)> = (j0..j1)
@@ -311,8 +307,7 @@ fn tiles(planes: &[PlaneRef], outline: &[Point], map: &Map, bin: f64) -> Vec<Til
         .par_iter()
         .flat_map_iter(|(p, first, rows)| {
             let plane = planes[*p];
-            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            let (ox, oy, sx, sy) = plane.centres();
             let lo = rows.iter().filter(|r| r.0 < r.1).map(|r| r.0).min();
             let hi = rows.iter().map(|r| r.1).max().unwrap_or(0);
             let lo = lo.unwrap_or(hi);

@@ -325,6 +325,16 @@ fn own_runs(
 mod tests {
     use super::*;
 
+    /// A deterministic uniform generator on [0, 1) from `seed`.
+    fn uniform(mut st: u64) -> impl FnMut() -> f64 {
+        move || {
+            st = st
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (st >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     fn strip_for(quad: [Point; 4], len: f64, wid: f64) -> Strip {
         let src = crate::geometry::rect_corners(0.0, 0.0, len, wid);
         Strip {
@@ -474,13 +484,7 @@ mod tests {
             let quad = [[15.0, 200.0], [385.0, 205.0], [380.0, 290.0], [20.0, 285.0]];
             let mut strip = strip_for(quad, 370.0, 85.0);
             strip.lens = Some(lens);
-            let mut st = 777u64;
-            let mut rnd = || {
-                st = st
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (st >> 11) as f64 / (1u64 << 53) as f64
-            };
+            let mut rnd = uniform(777u64);
             let data = (0..w * h)
                 .map(|k| {
                     let (x, y) = ((k % w) as f64, (k / w) as f64);
@@ -527,13 +531,7 @@ mod tests {
         // turned any way, keystoned, partly outside the frame, tiny or long:
         // no panic, and every bin as the brute force gives it.
         let (w, h) = (160, 120);
-        let mut st = 99u64;
-        let mut rnd = || {
-            st = st
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (st >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(99u64);
         let data: Vec<f32> = (0..w * h)
             .map(|k| (0.5 + 0.4 * ((k % w) as f64 * 0.37 + (k / w) as f64 * 0.11).sin()) as f32)
             .collect();
@@ -609,13 +607,7 @@ mod tests {
         let (w, h) = (180, 140);
         let quad = [[20.0, 30.0], [330.0, 12.0], [345.0, 250.0], [12.0, 200.0]];
         let strip = strip_for(quad, 300.0, 60.0);
-        let mut st = 12345u64;
-        let mut rnd = || {
-            st = st
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (st >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(12345u64);
         let mut data = vec![0f32; w * h];
         for j in 0..h {
             for i in 0..w {

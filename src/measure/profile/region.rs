@@ -89,8 +89,7 @@ impl Region<'_> {
         let last = self.nbins - 1;
         for band in self.bands() {
             let plane = self.planes[band.plane];
-            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            let (ox, oy, sx, sy) = plane.centres();
             for (dj, &(i0, i1)) in band.rows.iter().enumerate() {
                 if i0 >= i1 {
                     continue;
@@ -128,8 +127,7 @@ impl Region<'_> {
     pub(super) fn bands(&self) -> Vec<Band> {
         let mut out = Vec::new();
         for (p, plane) in self.planes.iter().enumerate() {
-            let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-            let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+            let (ox, oy, sx, sy) = plane.centres();
             // Sample rows whose centres lie within the region's vertical extent.
             let j0 = ((self.ymin - oy) / sy).ceil().max(0.0) as usize;
             let j1 =
@@ -165,8 +163,7 @@ impl Region<'_> {
         let inv_bin = 1.0 / self.bin;
         let last = self.nbins - 1;
         let plane = self.planes[band.plane];
-        let (sx, sy) = (plane.step.0 as f64, plane.step.1 as f64);
-        let (ox, oy) = (plane.offset.0 as f64 + 0.5, plane.offset.1 as f64 + 0.5);
+        let (ox, oy, sx, sy) = plane.centres();
         let rows = &band.rows;
         let lo = rows.iter().filter(|r| r.0 < r.1).map(|r| r.0).min();
         let hi = rows.iter().map(|r| r.1).max().unwrap_or(0);
@@ -201,8 +198,9 @@ impl Region<'_> {
     }
 }
 
-/// Rows and columns of a tile in [`Region::visit_band`].
-const TILE: usize = 64;
+/// Rows and columns of a tile in [`Region::visit_band`] (and of the lens
+/// path's tiles).
+pub(super) const TILE: usize = 64;
 
 /// Up to TILE consecutive sample rows of one plane, with each row's [i0, i1) range.
 pub(super) struct Band {

@@ -25,12 +25,3 @@ pub fn truth_at(truth: &[(f64, f64)], f: f64) -> f64 {
     let (a, b) = (truth[i - 1], truth[i]);
     a.1 + (b.1 - a.1) * (f - a.0) / (b.0 - a.0)
 }
-
-/// Linear interpolation of the simulator's truth rows (sorted by frequency) at `f` cy/px.
-pub fn rows_truth_at(rows: &[sweepmtf::simulate::TruthRow], f: f64) -> f64 {
-    let i = rows
-        .partition_point(|r| r.freq_cy_px < f)
-        .clamp(1, rows.len() - 1);
-    let (a, b) = (&rows[i - 1], &rows[i]);
-    a.mtf + (b.mtf - a.mtf) * (f - a.freq_cy_px) / (b.freq_cy_px - a.freq_cy_px)
-}
