@@ -6,7 +6,7 @@
 //! warning instead of turning into nonsense downstream.
 
 use serde::Serialize;
-use std::io::{BufReader, Cursor};
+use std::io::{BufReader, Cursor, Read, Seek, SeekFrom};
 use std::path::Path;
 use thiserror::Error;
 
@@ -254,16 +254,45 @@ pub fn read_facts(path: &Path) -> Result<ExifFacts, ExifError> {
             },
         });
     }
-    let file = std::fs::File::open(path).map_err(|e| ExifError::Io {
+    let io = |e: std::io::Error| ExifError::Io {
         path: path.display().to_string(),
         cause: e.to_string(),
-    })?;
+    };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    // A JPEG's EXIF is in its headers: the first HEAD_READ bytes usually hold
+    // them all, and the rest of the file is not read.
+    let mut head = Vec::new();
+    (&mut file)
+        .take(HEAD_READ)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    if let Some(h) = jpeg_headers(&head) {
+        return Ok(facts_from_reader(&mut Cursor::new(h)));
+    }
+    file.seek(SeekFrom::Start(0)).map_err(io)?;
     Ok(facts_from_reader(&mut BufReader::new(file)))
+}
+
+/// How much of a file [`read_facts`] reads first, bytes.
+const HEAD_READ: u64 = 256 << 10;
+
+/// A JPEG's headers up to its first scan, closed with an end-of-image marker,
+/// when `bytes` hold them all: where kamadak-exif looks for EXIF. Given the
+/// whole file, it reads on through the scan data to the end looking for
+/// markers (1.1 ms for a 24 MP JPEG without EXIF, before any decoding).
+fn jpeg_headers(bytes: &[u8]) -> Option<Vec<u8>> {
+    let (_, sos, _) = super::jpeg::header_segments(bytes).find(|s| s.0 == 0xDA)?;
+    let mut h = bytes[..sos].to_vec();
+    h.extend_from_slice(&[0xFF, 0xD9]);
+    Some(h)
 }
 
 /// EXIF facts from the bytes of a JPEG/TIFF/PNG/HEIF/WebP file (empty facts with a warning when absent).
 pub fn facts_from_bytes(bytes: &[u8]) -> ExifFacts {
-    facts_from_reader(&mut Cursor::new(bytes))
+    match jpeg_headers(bytes) {
+        Some(h) => facts_from_reader(&mut Cursor::new(h)),
+        None => facts_from_reader(&mut Cursor::new(bytes)),
+    }
 }
 
 /// EXIF facts from a TIFF-based or other container kamadak-exif knows; `None` if it finds none.
@@ -376,6 +405,36 @@ fn facts_from_exif(ex: &::exif::Exif) -> ExifFacts {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_jpegs_headers_hold_the_same_facts_as_the_whole_file() {
+        // kamadak-exif over the whole file is the reference; the real files
+        // are three cameras' JPEGs (one with a large maker note).
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/real/exif_jpeg");
+        let mut n = 0;
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_none_or(|x| x != "jpg") {
+                continue;
+            }
+            let bytes = std::fs::read(&p).unwrap();
+            let whole = ::exif::Reader::new()
+                .read_from_container(&mut Cursor::new(&bytes))
+                .unwrap();
+            let want = format!("{:?}", facts_from_exif(&whole));
+            assert!(jpeg_headers(&bytes).is_some(), "{}", p.display());
+            assert_eq!(format!("{:?}", facts_from_bytes(&bytes)), want);
+            assert_eq!(format!("{:?}", read_facts(&p).unwrap()), want);
+            n += 1;
+        }
+        assert_eq!(n, 3);
+        // Cut short before its first scan: the whole (short) file is read as before.
+        let b =
+            std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata/a4_log_shot.jpg"))
+                .unwrap();
+        assert!(jpeg_headers(&b[..100]).is_none());
+        assert!(facts_from_bytes(&b[..100]).f_number.is_none());
+    }
 
     #[test]
     fn zero_and_nan_values_become_absent_with_a_warning() {
