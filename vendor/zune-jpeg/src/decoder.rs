@@ -157,6 +157,9 @@ pub struct JpegDecoder<T> {
     pub(crate) coeff:    usize, // Solves some weird bug :)
     /// Extended XMP segments
     pub(crate) extended_xmp_segments: Vec<ExtendedXmpSegment>,
+    // sweepmtf: whether the baseline luma-only decode runs its IDCT on a
+    // second thread (crate::pipeline): `None` decides by image size.
+    pub(crate) pipeline: Option<bool>,
 }
 
 impl<T> JpegDecoder<T>
@@ -203,6 +206,7 @@ where
             is_mjpeg:          false,
             coeff:             1,
             extended_xmp_segments: vec![],
+            pipeline:          None, // sweepmtf
         }
     }
     /// Decode a buffer already in memory
@@ -337,6 +341,14 @@ where
     /// ```
     pub fn set_options(&mut self, options: DecoderOptions) {
         self.options = options;
+    }
+    /// sweepmtf: whether a sequential, single-scan JPEG decoded to `Luma` runs
+    /// its IDCT and row copy on a second thread while this one decodes the
+    /// entropy-coded data (the output is the same either way). `None`, the
+    /// default: on for images of at least 512 × 512 pixels; `Some(on)`:
+    /// forced (`Some(false)` is the unmodified inline path).
+    pub fn set_pipelined_idct(&mut self, on: Option<bool>) {
+        self.pipeline = on;
     }
     fn reassemble_extended_xmp(&mut self) {
         if self.extended_xmp_segments.is_empty() {

@@ -187,6 +187,8 @@ mod marker;
 mod mcu;
 mod mcu_prog;
 mod misc;
+// sweepmtf: the threaded IDCT of the baseline luma-only decode.
+mod pipeline;
 mod unsafe_utils;
 mod unsafe_utils_avx2;
 mod unsafe_utils_neon;

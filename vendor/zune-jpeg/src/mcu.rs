@@ -24,6 +24,7 @@ use crate::mcu_prog::get_marker;
 use crate::misc::{calculate_padded_width, setup_component_params};
 use crate::worker::{color_convert, upsample};
 use crate::JpegDecoder;
+use crate::pipeline::IdctBatch; // sweepmtf
 
 /// The size of a DC block for a MCU.
 
@@ -189,6 +190,23 @@ impl<T: ZByteReaderTrait> JpegDecoder<T> {
         let is_hv = usize::from(self.is_interleaved);
         let upsampler_scratch_size = is_hv * self.components.iter().map(|x| x.width_stride).max().unwrap_or(0) * 8;
         let mut upsampler_scratch_space = vec![0; upsampler_scratch_size];
+
+        // sweepmtf: a single-scan decode to Luma may run its IDCT and row copy
+        // on a second thread (crate::pipeline); the same output.
+        #[cfg(feature = "std")]
+        if all_components_in_first_scan && self.pipeline_applies() {
+            if let Some(done) = self.decode_baseline_luma_pipelined(
+                pixels,
+                mcu_width,
+                mcu_height,
+                width,
+                padded_width,
+                &mut stream,
+                &mut tmp
+            ) {
+                return done;
+            }
+        }
 
         'sos: loop {
             trace!(
@@ -409,21 +427,54 @@ impl<T: ZByteReaderTrait> JpegDecoder<T> {
         //
         // We statically specialize on this to improve code generation of the common case a little
         // bit. We could also special case common sub-sampling cases but be mindful of code bloat.
+        // sweepmtf: the IDCT is run here (DEFER = false; the batch is unused).
+        let batch = &mut IdctBatch::default();
         if is_one_by_one {
-            self.inner_decode_mcu_width::<PROGRESSIVE, false>(
+            self.inner_decode_mcu_width::<PROGRESSIVE, false, false>(
                 mcu_width,
                 mcu_height,
                 tmp,
                 stream,
-                progressive
+                progressive,
+                batch
             )
         } else {
-            self.inner_decode_mcu_width::<PROGRESSIVE, true>(
+            self.inner_decode_mcu_width::<PROGRESSIVE, true, false>(
                 mcu_width,
                 mcu_height,
                 tmp,
                 stream,
-                progressive
+                progressive,
+                batch
+            )
+        }
+    }
+
+    /// sweepmtf: `decode_mcu_width::<false>` that leaves each needed block's
+    /// IDCT to the caller: its coefficients, `len` and position go to `batch`.
+    #[cfg(feature = "std")]
+    pub(crate) fn decode_mcu_width_deferred(
+        &mut self, mcu_width: usize, mcu_height: usize, tmp: &mut [i32; 64],
+        stream: &mut BitStream, batch: &mut IdctBatch
+    ) -> Result<McuContinuation, DecodeErrors> {
+        let progressive = &mut [vec![], vec![], vec![], vec![]];
+        if !self.scan_subsampled {
+            self.inner_decode_mcu_width::<false, false, true>(
+                mcu_width,
+                mcu_height,
+                tmp,
+                stream,
+                progressive,
+                batch
+            )
+        } else {
+            self.inner_decode_mcu_width::<false, true, true>(
+                mcu_width,
+                mcu_height,
+                tmp,
+                stream,
+                progressive,
+                batch
             )
         }
     }
@@ -433,9 +484,11 @@ impl<T: ZByteReaderTrait> JpegDecoder<T> {
     // constant folding. And constant folding is quite important for performance here as
     // when `not SAMPLED` then the inner loop has exactly one iteration per component in
     // the scan. The difference was ~1% or a bit more.
-    fn inner_decode_mcu_width<const PROGRESSIVE: bool, const SAMPLED: bool>(
+    // sweepmtf: DEFER (only with !PROGRESSIVE) hands each needed block to
+    // `batch` instead of running its IDCT here.
+    fn inner_decode_mcu_width<const PROGRESSIVE: bool, const SAMPLED: bool, const DEFER: bool>(
         &mut self, mcu_width: usize, mcu_height: usize, tmp: &mut [i32; 64],
-        stream: &mut BitStream, progressive: &mut [Vec<i16>; 4]
+        stream: &mut BitStream, progressive: &mut [Vec<i16>; 4], batch: &mut IdctBatch
     ) -> Result<McuContinuation, DecodeErrors> {
         let z_order = self.z_order;
         let z_scans = &z_order[..usize::from(self.num_scans)];
@@ -520,7 +573,18 @@ impl<T: ZByteReaderTrait> JpegDecoder<T> {
                         if SAMPLED && !PROGRESSIVE { 0..component.horizontal_sample } else { 0..1 };
 
                     for h_samp in h_step {
-                        let result = if component_samples_needed {
+                        let result = if DEFER && component_samples_needed {
+                            // sweepmtf: straight into a zeroed slot of the
+                            // batch (what `tmp` holds here after its clobber).
+                            stream.decode_mcu_block(
+                                &mut self.stream,
+                                dc_table,
+                                ac_table,
+                                qt_table,
+                                batch.slot(),
+                                &mut component.dc_pred
+                            )
+                        } else if component_samples_needed {
                             // Fill the array with zeroes, decode_mcu_block expects
                             // a zero based array. Clobber is in zig-zag order though.
                             // Writing consecutive entries is basically free in terms
@@ -579,6 +643,12 @@ impl<T: ZByteReaderTrait> JpegDecoder<T> {
 
                                 component.width_stride * c2 + c3
                             };
+
+                            // sweepmtf: deferred, the same IDCT runs later on the worker.
+                            if DEFER {
+                                batch.commit(len, idct_position);
+                                continue;
+                            }
 
                             let idct_pos = channel.get_mut(idct_position..).unwrap();
 
@@ -690,7 +760,7 @@ impl<T: ZByteReaderTrait> JpegDecoder<T> {
     /// * `Ok(true)` - Found SOS, ready to continue decoding
     /// * `Ok(false)` - Found EOI, decoding complete
     /// * `Err(_)` - Error (too many markers, unexpected marker in strict mode, etc.)
-    fn advance_to_next_sos(
+    pub(crate) fn advance_to_next_sos( // sweepmtf: pub(crate), for crate::pipeline
         &mut self,
         first_marker: Marker,
         stream: &mut BitStream
@@ -947,7 +1017,7 @@ impl<T: ZByteReaderTrait> JpegDecoder<T> {
     }
 }
 
-enum McuContinuation {
+pub(crate) enum McuContinuation { // sweepmtf: pub(crate), for crate::pipeline
     Ok,
     AnotherSos,
     /// Found an inter-scan marker (DHT/DQT/DRI/COM/APP) that needs handling.
