@@ -137,8 +137,8 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
         path: name.to_string(),
         what,
     };
-    let cut =
-        frame_facts(bytes).and_then(|f| want.rows.and_then(|r| cut_height(&f, r)).map(|h| (f, h)));
+    let facts = frame_facts(bytes);
+    let cut = facts.and_then(|f| want.rows.and_then(|r| cut_height(&f, r)).map(|h| (f, h)));
     // The copy with the lowered height (headers and scan data: zune-jpeg reads one slice).
     let patched;
     let input: &[u8] = match cut {
@@ -192,10 +192,15 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
     d.set_options(opts);
     let mut warnings = Vec::new();
     let span = super::hugebuf::span_of(&buf[..width * decoded * channels]);
-    let (strict, ()) = rayon::join(
-        || d.decode_into(&mut buf[..width * decoded * channels]),
-        || super::hugebuf::populate(span),
-    );
+    let strict = if pipelined_idct(facts, out_space, width * decoded) {
+        d.decode_into(&mut buf[..width * decoded * channels])
+    } else {
+        rayon::join(
+            || d.decode_into(&mut buf[..width * decoded * channels]),
+            || super::hugebuf::populate(span),
+        )
+        .0
+    };
     if let Err(strict) = strict {
         if is_unsupported(&strict) {
             return Err(unsupported(strict.to_string()));
@@ -222,6 +227,15 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
         declared_tone: None,
         jpeg_luma_quant: super::jpeg_quant::luma_table(bytes).map(Box::new),
     })
+}
+
+/// Whether zune-jpeg (vendor/zune-jpeg/SWEEPMTF.md) runs the IDCT of this
+/// decode on a second thread; that thread then also takes the page faults of
+/// the output, which `hugebuf::populate` would take on it otherwise.
+fn pipelined_idct(f: Option<Frame>, out: ColorSpace, pixels: usize) -> bool {
+    out == ColorSpace::Luma
+        && f.is_some_and(|f| f.sequential && f.first_scan == f.components)
+        && pixels >= 512 * 512
 }
 
 fn is_unsupported(e: &DecodeErrors) -> bool {

@@ -26,6 +26,7 @@ mod gui_batch;
 mod gui_browser;
 mod gui_magnify;
 mod gui_timing;
+mod jpeg_pipelined_idct;
 mod jpeg_region;
 mod lens_mtf;
 mod locate_each_chart;
