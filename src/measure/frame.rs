@@ -155,9 +155,15 @@ pub(super) fn measure_frame_at(
         let pad = super::lens_fit::search_pad_px(q, w, h);
         let c = bbox_crop(q, w, h, pad);
         let band = |y: usize| super::lens_fit::edge_band_span(q, pad + 2.0, y);
-        let mut groups =
-            frame.channel_groups_within(RawChannel::G, (c.x0, c.y0, c.x1, c.y1), &band);
-        Box::new(groups.swap_remove(0).1.swap_remove(0))
+        let groups = frame.channel_groups_within(RawChannel::G, (c.x0, c.y0, c.x1, c.y1), &band);
+        // A damaged file's colour pattern may hold no green site (found by
+        // the fuzzer: it panicked here): an empty plane, in which no edge is
+        // found, so no distortion is applied.
+        let green = groups
+            .into_iter()
+            .next()
+            .and_then(|g| g.1.into_iter().next());
+        Box::new(green.unwrap_or_else(|| crate::photo::Plane::full(0, 0, Vec::new())))
     })
     .map_err(err)?;
     let lens = distortion.and_then(|d| d.lens(frame.width, frame.height));

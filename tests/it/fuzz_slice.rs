@@ -32,3 +32,20 @@ fn fuzz_slice_no_panic_no_hang() {
     // Both outcomes occur: the mutations neither always break nor never break a file.
     assert!(ok > 10 && clean > 10, "{ok} ok, {clean} clean errors");
 }
+
+/// Cases a longer run found (seed 2615): raw files whose damaged colour
+/// pattern has no green site panicked in the distortion estimate's sampler.
+#[test]
+fn fuzz_cases_found_by_longer_runs_end_cleanly() {
+    let corpus = Corpus::new(env!("CARGO_MANIFEST_DIR").as_ref()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for (seed, i) in [(2615, 2925), (2615, 3541)] {
+        let r = std::panic::catch_unwind(|| corpus.run(seed, i, dir.path()));
+        let (s, _, what) = corpus.case(seed, i);
+        assert!(
+            r.is_ok(),
+            "case {i} of seed {seed} [{}: {what}] panicked",
+            s.name
+        );
+    }
+}
