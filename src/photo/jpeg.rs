@@ -192,7 +192,12 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
     d.set_options(opts);
     let mut warnings = Vec::new();
     let span = super::hugebuf::span_of(&buf[..width * decoded * channels]);
-    let strict = if pipelined_idct(facts, out_space, width * decoded) {
+    // Only where this thread's pool has a second thread to give (a batch
+    // worker measuring its shot on one thread keeps to one).
+    let pipelined =
+        pipelined_idct(facts, out_space, width * decoded) && rayon::current_num_threads() >= 2;
+    d.set_pipelined_idct(Some(pipelined));
+    let strict = if pipelined {
         d.decode_into(&mut buf[..width * decoded * channels])
     } else {
         rayon::join(
@@ -210,6 +215,7 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
             ZCursor::new(input),
             options(false).jpeg_set_out_colorspace(out_space),
         );
+        d.set_pipelined_idct(Some(pipelined));
         d.decode_into(&mut buf[..width * decoded * channels])
             .map_err(|e| corrupt(e.to_string()))?;
         warnings.push(format!(
