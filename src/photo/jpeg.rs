@@ -14,6 +14,11 @@
 //!   plane alone (no chroma IDCT, upsampling or colour conversion): a
 //!   one-channel image of Y′ codes. On a neutral chart Y′ equals R′ = G′ = B′
 //!   up to JPEG's chroma rounding (see the README's "Speed and memory").
+//! - **Both cores.** For such a luma decode of a sequential one-scan file,
+//!   zune-jpeg (vendored with one change, `vendor/zune-jpeg/SWEEPMTF.md`)
+//!   entropy-decodes on this thread and runs the IDCT on a second one, when
+//!   the calling rayon pool has a second thread to give (a batch worker's
+//!   pool of one does not); the pixels are the same either way.
 //!
 //! Rows below the cut are left zero in a full-size buffer whose pages are
 //! never touched (so they cost no memory); [`Decoded::rows`] says how many
