@@ -289,10 +289,8 @@ fn jpeg_headers(bytes: &[u8]) -> Option<Vec<u8>> {
 
 /// EXIF facts from the bytes of a JPEG/TIFF/PNG/HEIF/WebP file (empty facts with a warning when absent).
 pub fn facts_from_bytes(bytes: &[u8]) -> ExifFacts {
-    match jpeg_headers(bytes) {
-        Some(h) => facts_from_reader(&mut Cursor::new(h)),
-        None => facts_from_reader(&mut Cursor::new(bytes)),
-    }
+    let headers = jpeg_headers(bytes);
+    facts_from_reader(&mut Cursor::new(headers.as_deref().unwrap_or(bytes)))
 }
 
 /// EXIF facts from a TIFF-based or other container kamadak-exif knows; `None` if it finds none.

@@ -102,6 +102,9 @@ pub(super) fn edge_points(
         // d > 0 outwards. The profile across the edge at d = −h_in + i·step
         // (i < nd), each value the mean of five samples along the edge.
         let nd = ((h_in + h_out) / step) as usize + 1;
+        if nd < 8 {
+            return None;
+        }
         let d_at = |i: usize| -h_in + i as f64 * step;
         let point = |d: f64, e: f64| -> Point {
             [
@@ -137,9 +140,6 @@ pub(super) fn edge_points(
             if prof[i].is_none() {
                 prof[i] = Some(value(i)?);
             }
-        }
-        if nd < 8 {
-            return None;
         }
         let mean =
             |r: std::ops::Range<usize>| r.map(|i| prof[i].unwrap_or(0.0)).sum::<f64>() / q as f64;
