@@ -7,7 +7,7 @@ use super::{CliError, Code};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use sweepmtf::measure::{Failure, MeasureError, MeasureOptions, Measurement};
-use sweepmtf::report::atomic::write_all_atomic;
+use sweepmtf::report::atomic::{ReportError, stage};
 use sweepmtf::report::json::{Timings, summary};
 use sweepmtf::report::mtf_plot::{PlotFormat, mtf_plot_with};
 use sweepmtf::report::{csv, roi_plot};
@@ -202,11 +202,11 @@ pub fn run(a: &Args) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The files `measure` writes for one measurement (in writing order), its
+/// The files `measure` wrote for one measurement (in writing order), its
 /// JSON summary and the summary line's suffix.
 pub struct Outputs {
-    /// (path, bytes) of each file.
-    pub files: Vec<(PathBuf, Vec<u8>)>,
+    /// The files written.
+    pub paths: Vec<PathBuf>,
     /// The path of `STEM.mtf.csv`.
     pub csv_path: PathBuf,
     /// The JSON summary (as written to `STEM.summary.json`).
@@ -217,9 +217,10 @@ pub struct Outputs {
     pub warnings: Vec<String>,
 }
 
-/// Builds one measurement's outputs as `out/STEM.*` (nothing is written);
+/// Makes and writes one measurement's outputs as `out/STEM.*`, all or none
+/// (each to a synced temporary, then every one renamed into place);
 /// `sweepmtf gui` saves through this too, so its files are `measure`'s.
-pub fn outputs(
+pub fn save_outputs(
     m: &Measurement,
     out_dir: &Path,
     stem: &str,
@@ -229,18 +230,18 @@ pub fn outputs(
 ) -> Result<Outputs, CliError> {
     let extras = prepared.finish(m)?;
     let out = |suffix: &str| out_dir.join(format!("{stem}.{suffix}"));
-    let out_err =
-        |e: sweepmtf::report::atomic::ReportError| CliError::new(Code::Output, e.to_string());
+    let out_err = |e: ReportError| CliError::new(Code::Output, e.to_string());
     let csv_path = out("mtf.csv");
     let plot_ext = match plot {
         PlotFormat::Png => "mtf.png",
         PlotFormat::Svg => "mtf.svg",
     };
     // The region picture (the longest: a large PNG to encode) is drawn and
-    // encoded beside everything else; the files keep their order.
-    let (roi_png, rest) = rayon::join(
-        || roi_plot::roi_plot(m),
-        || {
+    // encoded beside everything else, which meanwhile is written to disk.
+    let roi_path = out("roi.png");
+    let (roi, rest) = rayon::join(
+        || roi_plot::roi_plot(m).and_then(|png| stage(&[(roi_path.clone(), png)])),
+        || -> Result<_, ReportError> {
             let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
             if m.curves.is_empty() {
                 files.push((csv_path.clone(), extras.patches_csv(csv::patches_csv(m))));
@@ -250,19 +251,24 @@ pub fn outputs(
                     files.push((out("patches.csv"), extras.patches_csv(csv::patches_csv(m))));
                 }
             }
-            let mtf_png = mtf_plot_with(m, plot, &extras.plot);
+            files.push((out(plot_ext), mtf_plot_with(m, plot, &extras.plot)?));
             let summary_value = extras.json(summary(m, Some(timings)), m);
             let mut summary_text = serde_json::to_string_pretty(&summary_value).unwrap_or_default();
             summary_text.push('\n');
-            (files, mtf_png, summary_value, summary_text)
+            let summary_file = (out("summary.json"), summary_text.into_bytes());
+            let paths: Vec<PathBuf> = files.iter().map(|f| f.0.clone()).collect();
+            let (body, last) = rayon::join(|| stage(&files), || stage(&[summary_file]));
+            Ok((body?, last?, paths, summary_value))
         },
     );
-    let (mut files, mtf_png, summary_value, summary_text) = rest;
-    files.push((out(plot_ext), mtf_png.map_err(out_err)?));
-    files.push((out("roi.png"), roi_png.map_err(out_err)?));
-    files.push((out("summary.json"), summary_text.into_bytes()));
+    let (body, last, mut paths, summary_value) = rest.map_err(out_err)?;
+    let roi = roi.map_err(out_err)?;
+    // The summary last, as before.
+    body.then(roi).then(last).commit().map_err(out_err)?;
+    paths.push(roi_path);
+    paths.push(out("summary.json"));
     Ok(Outputs {
-        files,
+        paths,
         csv_path,
         summary: summary_value,
         line_suffix: extras.line_suffix(m),
@@ -280,8 +286,7 @@ fn write_outputs(
     timings: Timings,
 ) -> Result<(), CliError> {
     let name = a.photo.display().to_string();
-    let o = outputs(m, &a.out, stem, a.flags.plot, prepared, timings)?;
-    write_all_atomic(&o.files).map_err(|e| CliError::new(Code::Output, e.to_string()))?;
+    let o = save_outputs(m, &a.out, stem, a.flags.plot, prepared, timings)?;
     for w in m.warnings.iter().chain(&o.warnings) {
         super::messages::warning(&format!("{name}: {w}"));
     }

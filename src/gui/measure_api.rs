@@ -348,7 +348,7 @@ pub fn save(s: &Server, v: Value) -> Reply {
             measure_ms: t_measured.as_secs_f64() * 1e3,
             total_ms: t.elapsed().as_secs_f64() * 1e3,
         };
-        let o = crate::cli::measure::outputs(
+        let o = crate::cli::measure::save_outputs(
             &m,
             &out,
             &j.photo.stem,
@@ -356,11 +356,9 @@ pub fn save(s: &Server, v: Value) -> Reply {
             &prepared,
             timings,
         )?;
-        sweepmtf::report::atomic::write_all_atomic(&o.files)
-            .map_err(|e| CliError::new(Code::Output, e.to_string()))?;
-        Ok(o.files
-            .into_iter()
-            .map(|(p, _)| p.display().to_string())
+        Ok(o.paths
+            .iter()
+            .map(|p| p.display().to_string())
             .collect::<Vec<_>>())
     });
     match written {

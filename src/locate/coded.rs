@@ -7,6 +7,7 @@
 //! the search's CPU).
 
 use super::downscale::factor;
+use super::row_reduction::ReducedSearch;
 use super::sample::Gray;
 use super::source::{BAND, Converted, Source, Window};
 use crate::photo::decode::{Decoded, Samples};
@@ -21,6 +22,8 @@ pub struct Coded<'a, F> {
     dec: &'a Decoded,
     /// The code → linear table and the channel weights ([`coded`]).
     table: Option<CodedTone>,
+    /// The search image, if already summed while the photo was decoded.
+    pre: Option<&'a ReducedSearch>,
 }
 
 /// `dec` as a search source: the linear values of `channel` through `tone`,
@@ -38,6 +41,32 @@ pub fn of_decoded<'a>(
         },
         dec,
         table: coded(dec, tone, channel),
+        pre: None,
+    }
+}
+
+impl<'a, F> Coded<'a, F> {
+    /// Searches `pre` as the reduced image, when it was summed as
+    /// [`Source::reduced`] would sum it (same factor, table and channel;
+    /// else it is left aside).
+    pub fn with_reduced(mut self, pre: Option<&'a ReducedSearch>) -> Self {
+        self.pre = pre.filter(|p| {
+            let k = factor(self.dec.width, self.dec.height);
+            let one_channel = self.dec.channels == 1 && matches!(self.dec.samples, Samples::U8(_));
+            let same_table = self.table.as_ref().is_some_and(|t| {
+                t.mix() == [(0, 1.0)]
+                    && t.table().len() == 256
+                    && t.table()
+                        .iter()
+                        .zip(p.lut.iter())
+                        .all(|(a, b)| a.to_bits() == b.to_bits())
+            });
+            one_channel
+                && same_table
+                && p.gray.scale == [k as f64, k as f64]
+                && (p.gray.w, p.gray.h) == (self.dec.width / k, self.dec.height / k)
+        });
+        self
     }
 }
 
@@ -47,6 +76,12 @@ impl<F: Fn(usize, usize, &mut [f32]) + Sync> Source for Coded<'_, F> {
     }
 
     fn reduced(&self) -> Gray<'_> {
+        if let Some(p) = self.pre {
+            return Gray {
+                data: Cow::Borrowed(&p.gray.data),
+                ..p.gray
+            };
+        }
         let k = factor(self.dec.width, self.dec.height);
         let fast = match (&self.table, &self.dec.samples) {
             (Some(t), Samples::U8(codes)) if k > 1 => {
@@ -112,7 +147,7 @@ impl<F> Coded<'_, F> {
 /// Adds to each `acc[i]` the sum, left to right, of the linear values of
 /// pixels `k·i .. k·i + k` of `line` (as [`super::downscale::add_box_sums`]
 /// sums a row of converted values). `mix` has one or three weights.
-fn add_code_sums<T: Copy + Into<usize>, const N: usize>(
+pub(super) fn add_code_sums<T: Copy + Into<usize>, const N: usize>(
     acc: &mut [f32],
     line: &[T],
     k: usize,

@@ -21,6 +21,7 @@ pub mod downscale;
 pub mod ellipse;
 mod masks;
 pub mod refine;
+pub mod row_reduction;
 pub mod sample;
 pub mod source;
 pub mod strip_ends;

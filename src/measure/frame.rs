@@ -14,22 +14,51 @@ use super::{
     resolve_distortion,
 };
 use crate::geometry::Point;
-use crate::photo::decode::{DecodeError, Decoded, decode_bytes_want};
-use crate::photo::jpeg::JpegWant;
-use crate::photo::linearise::{Channel, coded, plane_names, planes_within};
+use crate::locate::row_reduction::{ReducedSearch, RowReduction};
+use crate::photo::decode::{DecodeError, Decoded, decode_bytes_observed};
+use crate::photo::jpeg::{JpegWant, ObserverFor};
+use crate::photo::linearise::{Channel, coded, default_tone, plane_names, planes_within};
 use crate::photo::{Plane, PlaneRef};
 use crate::target::Target;
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
-/// Reads and decodes a photo (not a raw), and resolves its pixel pitch from
-/// EXIF and the options: the photo, the options with the pitch, and the
-/// messages of decoding (damaged scan data) and of the pitch.
-pub(super) fn decode_with_pitch(
+/// Reads and decodes a photo (not a raw) the target will be searched for,
+/// and resolves its pixel pitch from EXIF and the options: the photo, the
+/// options with the pitch, the messages of decoding (damaged scan data) and
+/// of the pitch, and the search image if it was summed from a JPEG's rows as
+/// they were decoded, on the decoder's second thread (`None` otherwise: the
+/// search then reduces the photo itself).
+pub(super) fn decode_for_search(
     path: &Path,
     name: &str,
     opts: &MeasureOptions,
-) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
-    decode_bytes_with_pitch(&read_photo(path, name)?, name, opts)
+) -> Result<(Decoded, MeasureOptions, Said, Option<ReducedSearch>), MeasureError> {
+    let slot: Mutex<Option<RowReduction>> = Mutex::new(None);
+    let slot = Arc::new(slot);
+    let make = |w: usize, h: usize| -> Option<zune_jpeg::RowObserver> {
+        // The table the search reads a JPEG's luma through (an 8-bit file's
+        // default tone); a file that declares another is reduced later.
+        let lut = default_tone(8).0.lut(256);
+        *slot.lock().ok()? = Some(RowReduction::new(w, h, &lut)?);
+        let slot = Arc::clone(&slot);
+        Some(Box::new(move |first: usize, rows: &[u8]| {
+            if let Ok(mut r) = slot.lock()
+                && let Some(r) = r.as_mut()
+            {
+                r.rows(first, rows);
+            }
+        }))
+    };
+    let bytes = read_photo(path, name)?;
+    let (dec, o, said) = decode_bytes_with(&bytes, name, opts, Some(&make))?;
+    // A decode with warnings may be a lenient retry, which the observer did not see.
+    let reduced = slot
+        .lock()
+        .ok()
+        .and_then(|mut r| r.take()?.finish())
+        .filter(|_| dec.warnings.is_empty());
+    Ok((dec, o, said, reduced))
 }
 
 /// Reads a photo file's bytes (`name` in the error).
@@ -44,16 +73,26 @@ pub(super) fn read_photo(path: &Path, name: &str) -> Result<Vec<u8>, MeasureErro
     })
 }
 
-/// [`decode_with_pitch`] of a photo file's bytes already in memory.
+/// A photo file's bytes already in memory, decoded as by [`decode_for_search`] (no search image).
 pub(super) fn decode_bytes_with_pitch(
     bytes: &[u8],
     name: &str,
     opts: &MeasureOptions,
 ) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
+    decode_bytes_with(bytes, name, opts, None)
+}
+
+/// [`decode_bytes_with_pitch`], a JPEG's rows shown to `observe`'s observer.
+fn decode_bytes_with(
+    bytes: &[u8],
+    name: &str,
+    opts: &MeasureOptions,
+    observe: Option<ObserverFor<'_>>,
+) -> Result<(Decoded, MeasureOptions, Said), MeasureError> {
     // The EXIF and the scan check read the bytes on the second core while
     // the decoder (one core) runs.
     let (dec, (facts, damage)) = rayon::join(
-        || decode_bytes_want(bytes, name, jpeg_want(opts)),
+        || decode_bytes_observed(bytes, name, jpeg_want(opts), observe),
         || {
             (
                 crate::photo::exif::facts_from_bytes(bytes),

@@ -59,13 +59,13 @@ pub use result::{Curve, Failure, MeasureError, Measurement, Preview};
 pub(crate) use result::{DAMAGE_MARK, Said};
 
 use frame::{
-    decode_bytes_with_pitch, decode_with_pitch, measure_decoded_at, measure_frame_at, read_photo,
+    decode_bytes_with_pitch, decode_for_search, measure_decoded_at, measure_frame_at, read_photo,
 };
 use profile::BinOptions;
 use rayon::prelude::*;
 use region::{
-    StripSpec, bbox_crop, found_said, full_grey, grey_source, locate_region, location_failed,
-    raw_read_window, refine_or_keep, resolve_roi, strips,
+    StripSpec, bbox_crop, found_said, full_grey, grey_source, grey_source_with, locate_region,
+    location_failed, raw_read_window, refine_or_keep, resolve_roi, strips,
 };
 use strip::measure_strip;
 /// A strip's curve and the note of how it was measured, if any.
@@ -149,12 +149,12 @@ pub fn measure_file_each(
     }
     // The target's pattern (for verifying charts) is sampled while the photo is decoded.
     let (decoded, pattern) = rayon::join(
-        || decode_with_pitch(path, &name, opts),
+        || decode_for_search(path, &name, opts),
         || crate::locate::assign::Pattern::new(&target),
     );
-    let (dec, o, said) = decoded?;
+    let (dec, o, said, reduced) = decoded?;
     let charts = found(crate::locate::find_charts_with(
-        &grey_source(&dec),
+        &grey_source_with(&dec, reduced.as_ref()),
         &target,
         &pattern,
     ))

@@ -131,7 +131,15 @@ pub(super) fn full_grey(dec: &Decoded) -> Vec<Plane> {
 /// The photo as the chart search reads it: linear luminance (the file's tone, the
 /// same values as [`full_grey`]), converted only where the search looks.
 pub(super) fn grey_source(dec: &Decoded) -> impl crate::locate::Source + '_ {
-    crate::locate::of_decoded(dec, &file_tone(dec).0, Channel::Luma)
+    grey_source_with(dec, None)
+}
+
+/// [`grey_source`] with its search image, if summed while decoding.
+pub(super) fn grey_source_with<'a>(
+    dec: &'a Decoded,
+    pre: Option<&'a crate::locate::row_reduction::ReducedSearch>,
+) -> impl crate::locate::Source + 'a {
+    crate::locate::of_decoded(dec, &file_tone(dec).0, Channel::Luma).with_reduced(pre)
 }
 
 /// Every copy of `target` in a decoded photo (left to right), found from its

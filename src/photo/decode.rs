@@ -8,7 +8,7 @@
 //! rows and planes asked for). An alpha channel is dropped. Truncated JPEGs (no end-of-image marker) are
 //! refused rather than silently filled with grey.
 
-use super::jpeg::{JpegWant, decode_jpeg};
+use super::jpeg::{JpegWant, decode_jpeg_observed};
 use image::{ColorType, DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 use std::io::Cursor;
 use std::path::Path;
@@ -118,6 +118,17 @@ pub fn decode_bytes(bytes: &[u8], name: &str) -> Result<Decoded, DecodeError> {
 /// Decodes an in-memory photo file, a JPEG only as far as `want` asks
 /// (see [`super::jpeg`]); other formats whole.
 pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, DecodeError> {
+    decode_bytes_observed(bytes, name, want, None)
+}
+
+/// [`decode_bytes_want`], a JPEG's luma rows shown as they are decoded
+/// ([`super::jpeg::decode_jpeg_observed`]).
+pub fn decode_bytes_observed(
+    bytes: &[u8],
+    name: &str,
+    want: JpegWant,
+    observe: Option<super::jpeg::ObserverFor<'_>>,
+) -> Result<Decoded, DecodeError> {
     let unsupported = |what: String| DecodeError::Unsupported {
         path: name.to_string(),
         what,
@@ -147,7 +158,7 @@ pub fn decode_bytes_want(bytes: &[u8], name: &str, want: JpegWant) -> Result<Dec
         ));
     }
     if format == ImageFormat::Jpeg {
-        return decode_jpeg(bytes, name, want).map(|mut d| {
+        return decode_jpeg_observed(bytes, name, want, observe).map(|mut d| {
             d.declared_tone = super::transfer::jpeg(bytes);
             d
         });

@@ -132,8 +132,25 @@ fn cut_height(f: &Frame, rows: usize) -> Option<usize> {
     (h < f.height).then_some(h)
 }
 
+/// Makes, given a photo's width and height (px), the observer of its
+/// decode's luma rows ([`zune_jpeg::RowObserver`]); `None`: none wanted.
+pub type ObserverFor<'a> = &'a (dyn Fn(usize, usize) -> Option<zune_jpeg::RowObserver> + Sync);
+
 /// Decodes a JPEG as `want` asks; `name` is used in messages.
 pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, DecodeError> {
+    decode_jpeg_observed(bytes, name, want, None)
+}
+
+/// [`decode_jpeg`], showing the rows to an observer made by `observe` as
+/// they are written, when the IDCT runs on a second thread (a luma decode
+/// of a sequential one-scan file): the observer's work then runs beside the
+/// entropy decoding. Only the strict decode is shown (not a lenient retry).
+pub fn decode_jpeg_observed(
+    bytes: &[u8],
+    name: &str,
+    want: JpegWant,
+    observe: Option<ObserverFor<'_>>,
+) -> Result<Decoded, DecodeError> {
     let corrupt = |cause: String| DecodeError::Corrupt {
         path: name.to_string(),
         cause,
@@ -202,6 +219,9 @@ pub fn decode_jpeg(bytes: &[u8], name: &str, want: JpegWant) -> Result<Decoded, 
     let pipelined =
         pipelined_idct(facts, out_space, width * decoded) && rayon::current_num_threads() >= 2;
     d.set_pipelined_idct(Some(pipelined));
+    if pipelined && let Some(make) = observe {
+        d.set_row_observer(make(width, decoded));
+    }
     let strict = if pipelined {
         d.decode_into(&mut buf[..width * decoded * channels])
     } else {

@@ -58,9 +58,24 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
 /// Writes several files: all are written to temporaries first, and only when
 /// every one succeeded are they renamed into place (temporaries are removed on failure).
 pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), ReportError> {
+    stage(files)?.commit()
+}
+
+/// Files written in full and flushed to disk as temporaries beside their
+/// final names, not yet in place: [`Staged::commit`] renames them all (in
+/// order); dropped uncommitted, the temporaries are removed. Staging lets
+/// the files that are ready be written while others are still being made.
+#[derive(Debug, Default)]
+pub struct Staged {
+    /// (final path, temporary path) of each file.
+    files: Vec<(PathBuf, PathBuf)>,
+}
+
+/// Writes `files` to synced temporaries (in parallel: each `sync_all` may
+/// wait for the file system's journal, and one wait then serves them all);
+/// on any failure none is kept.
+pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged, ReportError> {
     use rayon::prelude::*;
-    // Written and flushed to disk in parallel: each `sync_all` may wait for
-    // the file system's journal, and one wait then serves them all.
     let written: Vec<std::io::Result<PathBuf>> = files
         .par_iter()
         .map(|(path, bytes)| {
@@ -78,32 +93,42 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), ReportError>
             }
         })
         .collect();
-    let cleanup = |temps: &[PathBuf]| {
-        for t in temps {
-            let _ = std::fs::remove_file(t);
-        }
-    };
-    let mut temps = Vec::with_capacity(files.len());
-    let mut failed = None;
-    for (k, r) in written.into_iter().enumerate() {
-        match r {
-            Ok(t) => temps.push(t),
-            Err(e) => {
-                failed.get_or_insert((k, e));
+    let mut staged = Staged::default();
+    for ((path, _), r) in files.iter().zip(written) {
+        // A failure drops `staged`, which removes the temporaries made so far.
+        let tmp = r.map_err(|e| io(path, e))?;
+        staged.files.push((path.clone(), tmp));
+    }
+    Ok(staged)
+}
+
+impl Staged {
+    /// These files followed by `other`'s, to be committed together.
+    pub fn then(mut self, mut other: Staged) -> Staged {
+        self.files.append(&mut other.files);
+        self
+    }
+
+    /// Renames every temporary over its final name, in order; on a failure
+    /// the files not yet renamed are left as they were.
+    pub fn commit(mut self) -> Result<(), ReportError> {
+        let files = std::mem::take(&mut self.files);
+        for (k, (path, tmp)) in files.iter().enumerate() {
+            if let Err(e) = std::fs::rename(tmp, path) {
+                self.files = files[k..].to_vec();
+                return Err(io(path, e));
             }
         }
+        Ok(())
     }
-    if let Some((k, e)) = failed {
-        cleanup(&temps);
-        return Err(io(&files[k].0, e));
-    }
-    for (k, ((path, _), tmp)) in files.iter().zip(&temps).enumerate() {
-        if let Err(e) = std::fs::rename(tmp, path) {
-            cleanup(&temps[k..]);
-            return Err(io(path, e));
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        for (_, tmp) in &self.files {
+            let _ = std::fs::remove_file(tmp);
         }
     }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -126,5 +151,47 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names.len(), 1, "{names:?}");
+    }
+
+    #[test]
+    fn staged_files_appear_only_on_commit_and_vanish_when_dropped() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.csv"), dir.path().join("b.png"));
+        std::fs::write(&a, "old").unwrap();
+        let names = || {
+            let mut v: Vec<String> = std::fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        let first = stage(&[(a.clone(), b"new".to_vec())]).unwrap();
+        let second = stage(&[(b.clone(), b"png".to_vec())]).unwrap();
+        // Staged: the old file is untouched, the new one not yet there.
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old");
+        assert!(!b.exists());
+        assert_eq!(names().len(), 3, "{:?}", names());
+        first.then(second).commit().unwrap();
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "png");
+        assert_eq!(names(), ["a.csv", "b.png"]);
+        // Dropped without a commit: nothing changes, no temporaries remain.
+        drop(stage(&[(a.clone(), b"newer".to_vec())]).unwrap());
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new");
+        assert_eq!(names(), ["a.csv", "b.png"]);
+        // A rename that fails (the final name is a folder) keeps the files
+        // after it out of place and removes their temporaries.
+        let c = dir.path().join("c.csv");
+        std::fs::create_dir(dir.path().join("d")).unwrap();
+        std::fs::write(dir.path().join("d").join("x"), "x").unwrap();
+        let staged = stage(&[
+            (dir.path().join("d"), b"d".to_vec()),
+            (c.clone(), b"c".to_vec()),
+        ])
+        .unwrap();
+        assert!(staged.commit().is_err());
+        assert!(!c.exists());
+        assert_eq!(names(), ["a.csv", "b.png", "d"]);
     }
 }

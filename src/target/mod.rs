@@ -52,6 +52,13 @@ pub struct Rect {
 }
 
 impl Rect {
+    /// Chebyshev distance (mm) from a chart point to the rectangle (0 inside).
+    pub fn chebyshev_distance(&self, x: f64, y: f64) -> f64 {
+        let dx = (self.x_mm - x).max(x - (self.x_mm + self.width_mm));
+        let dy = (self.y_mm - y).max(y - (self.y_mm + self.height_mm));
+        dx.max(dy).max(0.0)
+    }
+
     /// Whether the chart point (mm) lies inside.
     pub fn contains(&self, x: f64, y: f64) -> bool {
         x >= self.x_mm
@@ -401,6 +408,24 @@ impl Target {
             return p.mean + m * (p.reflectance_at(x, y) - p.mean);
         }
         self.reflectance(x, y)
+    }
+
+    /// How far (mm, Chebyshev distance) a chart point lies from every printed
+    /// region (fiducial squares, sweeps, sine and grey patches); 0 inside
+    /// one. Within a smaller distance in x and y the reflectance is the
+    /// background's.
+    pub fn background_clearance(&self, x: f64, y: f64) -> f64 {
+        let fid = self.fiducials.iter().map(|f| {
+            let d = f.diameter_mm;
+            ((x - f.x_mm).abs() - d)
+                .max((y - f.y_mm).abs() - d)
+                .max(0.0)
+        });
+        let rects = (self.sweeps.iter().map(|s| &s.rect))
+            .chain(self.patches.iter().map(|p| &p.rect))
+            .chain(self.greys.iter().map(|g| &g.rect))
+            .map(|r| r.chebyshev_distance(x, y));
+        fid.chain(rects).fold(f64::INFINITY, f64::min)
     }
 
     /// Linear reflectance (0 = black, 1 = paper white) at a chart point (mm).

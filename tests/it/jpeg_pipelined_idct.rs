@@ -57,7 +57,7 @@ fn same(bytes: &[u8], what: &str) -> usize {
 
 /// A picture with flat areas (1×1 IDCT), smooth ramps (4×4) and noise and
 /// edges (full IDCT); `channels` 1 or 3.
-fn picture(w: usize, h: usize, channels: usize, seed: u64) -> Vec<u8> {
+pub(crate) fn picture(w: usize, h: usize, channels: usize, seed: u64) -> Vec<u8> {
     let mut s = seed | 1;
     let mut rnd = move || {
         s ^= s << 13;
@@ -88,7 +88,7 @@ fn picture(w: usize, h: usize, channels: usize, seed: u64) -> Vec<u8> {
     v
 }
 
-fn encode(
+pub(crate) fn encode(
     w: usize,
     h: usize,
     grey: bool,
@@ -115,7 +115,7 @@ fn encode(
 }
 
 /// Where the entropy-coded data starts (after the first SOS segment).
-fn scan_start(b: &[u8]) -> usize {
+pub(crate) fn scan_start(b: &[u8]) -> usize {
     let mut i = 2;
     while i + 4 <= b.len() {
         let len = usize::from(u16::from_be_bytes([b[i + 2], b[i + 3]]));
@@ -130,7 +130,7 @@ fn scan_start(b: &[u8]) -> usize {
 /// The file damaged in ways that reach the decoder's exits: cut short
 /// (premature end), bytes changed (bad Huffman codes), an EOI, a DHT or an
 /// unknown marker inside the scan data.
-fn damaged(b: &[u8]) -> Vec<(String, Vec<u8>)> {
+pub(crate) fn damaged(b: &[u8]) -> Vec<(String, Vec<u8>)> {
     let s = scan_start(b);
     let n = b.len() - s;
     let mut v = Vec::new();

@@ -28,6 +28,7 @@ mod gui_magnify;
 mod gui_timing;
 mod jpeg_pipelined_idct;
 mod jpeg_region;
+mod jpeg_row_reduction;
 mod lens_mtf;
 mod locate_each_chart;
 mod locate_find;

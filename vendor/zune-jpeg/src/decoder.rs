@@ -160,6 +160,8 @@ pub struct JpegDecoder<T> {
     // sweepmtf: whether the baseline luma-only decode runs its IDCT on a
     // second thread (crate::pipeline): `None` decides by image size.
     pub(crate) pipeline: Option<bool>,
+    // sweepmtf: shown the rows of a pipelined decode as they are written.
+    pub(crate) row_observer: Option<crate::pipeline::RowObserver>,
 }
 
 impl<T> JpegDecoder<T>
@@ -207,6 +209,7 @@ where
             coeff:             1,
             extended_xmp_segments: vec![],
             pipeline:          None, // sweepmtf
+            row_observer:      None, // sweepmtf
         }
     }
     /// Decode a buffer already in memory
@@ -349,6 +352,15 @@ where
     /// forced (`Some(false)` is the unmodified inline path).
     pub fn set_pipelined_idct(&mut self, on: Option<bool>) {
         self.pipeline = on;
+    }
+    /// sweepmtf: a callback shown the output rows of a pipelined decode (see
+    /// [`set_pipelined_idct`](Self::set_pipelined_idct)) as the second thread
+    /// writes them, on that thread: the first row's index and those rows'
+    /// samples. Rows are shown once each, in order; rows that a damaged or
+    /// cut-short file leaves filled with 128 are not shown, and an inline
+    /// decode shows none. `None` removes it.
+    pub fn set_row_observer(&mut self, f: Option<crate::pipeline::RowObserver>) {
+        self.row_observer = f;
     }
     fn reassemble_extended_xmp(&mut self) {
         if self.extended_xmp_segments.is_empty() {

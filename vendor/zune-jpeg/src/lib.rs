@@ -189,6 +189,7 @@ mod mcu_prog;
 mod misc;
 // sweepmtf: the threaded IDCT of the baseline luma-only decode.
 mod pipeline;
+pub use pipeline::RowObserver; // sweepmtf
 mod unsafe_utils;
 mod unsafe_utils_avx2;
 mod unsafe_utils_neon;

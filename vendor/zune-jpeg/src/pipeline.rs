@@ -19,7 +19,14 @@
 //! a marker that ends the scan) first waits for the rows sent before it, as
 //! the inline decoder would have processed them.
 
+use alloc::boxed::Box;
 use alloc::vec::Vec;
+
+/// sweepmtf: sees the rows of a pipelined decode as they are written, on the
+/// thread that writes them: (index of the first row, those rows' samples,
+/// `width` bytes each). Rows that a damaged or cut-short file leaves filled
+/// with 128 are not shown.
+pub type RowObserver = Box<dyn FnMut(usize, &[u8]) + Send>;
 
 /// The IDCT inputs of the needed blocks of some MCU rows, in decoding order.
 #[derive(Default)]
@@ -79,6 +86,20 @@ impl IdctBatch {
         self.coeffs.truncate(c);
     }
 
+    /// An empty batch whose memory for `blocks` blocks of up to `per_block`
+    /// coefficients is already written once (its pages faulted in), so the
+    /// thread that fills it does not take those faults.
+    #[cfg(feature = "std")]
+    fn touched(blocks: usize, per_block: usize) -> IdctBatch {
+        let mut b = IdctBatch {
+            rows: Vec::new(),
+            coeffs: alloc::vec![0; blocks * per_block],
+            blocks: alloc::vec![(0, 0); blocks]
+        };
+        b.clear();
+        b
+    }
+
     fn clear(&mut self) {
         self.rows.clear();
         self.coeffs.clear();
@@ -114,6 +135,10 @@ mod threaded {
     /// thread wake-up (tens of µs here), one per MCU row cost all the gain.
     const BLOCKS: usize = 8192;
 
+    /// Coefficients per block made ready in a new batch (most blocks of a
+    /// photo keep 32 or 64; more grow the batch as needed).
+    const TOUCHED_PER_BLOCK: usize = 48;
+
     /// Images with fewer pixels are decoded inline unless forced.
     const MIN_PIXELS: usize = 512 * 512;
 
@@ -134,7 +159,9 @@ mod threaded {
         padded_width: usize,
         color_convert_16: ColorConvert16Ptr,
         input_colorspace: ColorSpace,
-        output_colorspace: ColorSpace
+        output_colorspace: ColorSpace,
+        /// Shown each MCU row's output rows once written.
+        observer: Option<&'a mut (dyn FnMut(usize, &[u8]) + Send)>
     }
 
     impl RowSink<'_> {
@@ -174,6 +201,7 @@ mod threaded {
             }
             // As `post_process` for a `Luma` output (only component 0).
             let (width, padded_width) = (self.width, self.padded_width);
+            let first = self.pixels_written;
             for (pos, output) in self.pixels[self.pixels_written..]
                 .chunks_exact_mut(width)
                 .take(self.rows_per_mcu)
@@ -194,6 +222,9 @@ mod threaded {
                     padded_width
                 )?;
                 self.pixels_written += width;
+            }
+            if let Some(f) = self.observer.as_mut() {
+                f(first / width.max(1), &self.pixels[first..self.pixels_written]);
             }
             Ok(())
         }
@@ -252,12 +283,19 @@ mod threaded {
                 } else {
                     8 * self.coeff
                 };
+                let mut observer = self.row_observer.take();
                 let ran = thread::scope(|s| {
                     let (give_sink, take_sink) = mpsc::sync_channel::<RowSink>(1);
                     let (to_worker, from_main) = mpsc::sync_channel::<IdctBatch>(BATCHES);
                     let (to_main, from_worker) = mpsc::sync_channel::<IdctBatch>(BATCHES);
                     let worker = thread::Builder::new().spawn_scoped(s, move || {
                         let mut sink = take_sink.recv().ok()?;
+                        // The main thread fills its first batch meanwhile;
+                        // the others are made here, their pages faulted in
+                        // off the entropy decoding's path.
+                        for _ in 1..BATCHES {
+                            let _ = to_main.send(IdctBatch::touched(BLOCKS, TOUCHED_PER_BLOCK));
+                        }
                         let mut sunk = Ok(());
                         for mut batch in from_main {
                             if let Err(e) = sink.run(&batch) {
@@ -285,12 +323,12 @@ mod threaded {
                         padded_width,
                         color_convert_16: self.color_convert_16,
                         input_colorspace: self.input_colorspace,
-                        output_colorspace: self.options.jpeg_get_out_colorspace()
+                        output_colorspace: self.options.jpeg_get_out_colorspace(),
+                        observer: observer.as_deref_mut().map(|f| f as _)
                     };
                     // (The worker waits for it: this cannot fail.)
                     let _ = give_sink.send(sink);
-                    let mut spare: Vec<IdctBatch> =
-                        (0..BATCHES).map(|_| IdctBatch::default()).collect();
+                    let mut spare: Vec<IdctBatch> = alloc::vec![IdctBatch::default()];
                     let mut exit = Exit::Done;
                     let mut batch = spare.pop();
                     for i in 0..mcu_height {
@@ -345,6 +383,7 @@ mod threaded {
                         Err(panic) => std::panic::resume_unwind(panic)
                     }
                 });
+                self.row_observer = observer;
                 let Some((exit, sunk, row, written)) = ran else {
                     // No second thread: inline, unless a scan was decoded here.
                     return if first_scan {
