@@ -29,6 +29,19 @@ pub fn ensure_font() {
 /// compression level: every plot and picture of the crate goes through here
 /// (they are written on every run; a smaller file is not worth the time).
 pub fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, String> {
+    encode_png_with(rgb, w, h, png::Compression::Fast)
+}
+
+/// [`encode_png`] for a photograph (the region picture, a magnified view):
+/// every row filtered by its difference from the row above, instead of the
+/// best of five filters tried per row. On the target shot's 1029 × 811
+/// region picture: 6.1 → 5.2 ms, 878 → 926 kB (a plot's flat areas need the
+/// search: its file grows six-fold this way).
+pub fn encode_png_photo(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, String> {
+    encode_png_with(rgb, w, h, png::Compression::Fastest)
+}
+
+fn encode_png_with(rgb: &[u8], w: u32, h: u32, level: png::Compression) -> Result<Vec<u8>, String> {
     if rgb.len() as u64 != w as u64 * h as u64 * 3 {
         return Err(format!("{} bytes for a {w}×{h} RGB picture", rgb.len()));
     }
@@ -37,7 +50,7 @@ pub fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, String> {
         let mut enc = png::Encoder::new(&mut out, w, h);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        enc.set_compression(png::Compression::Fast);
+        enc.set_compression(level);
         let mut wr = enc.write_header().map_err(|e| e.to_string())?;
         wr.write_image_data(rgb).map_err(|e| e.to_string())?;
     }

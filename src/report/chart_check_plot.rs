@@ -129,5 +129,5 @@ pub fn chart_check_png(
             .map_err(err)?;
         root.present().map_err(err)?;
     }
-    super::roi_plot::encode_png(buf, W, H)
+    crate::plot::encode_png(&buf, W, H).map_err(err)
 }

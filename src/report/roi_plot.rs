@@ -14,9 +14,9 @@ fn err(e: impl std::fmt::Display) -> ReportError {
     }
 }
 
-/// Encodes an RGB8 buffer as PNG ([`crate::plot::encode_png`]), errors as the region picture's.
+/// Encodes an RGB8 photograph as PNG ([`crate::plot::encode_png_photo`]), errors as the region picture's.
 pub fn encode_png(buf: Vec<u8>, w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
-    crate::plot::encode_png(&buf, w, h).map_err(err)
+    crate::plot::encode_png_photo(&buf, w, h).map_err(err)
 }
 
 /// Renders the region picture (PNG bytes).
