@@ -4,6 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --features examples --example fuzz -- [--cases N] [--seed S] [--from K] [--log FILE]
+//! cargo run --release --features examples --example fuzz -- --seed S --dump K FILE
 //! ```
 //!
 //! The cases run in a child process (this program re-run with `--child`),
@@ -41,6 +42,17 @@ fn main() {
     let seed: u64 = arg(&args, "--seed")
         .and_then(|s| s.parse().ok())
         .unwrap_or(19);
+    // `--dump K FILE`: writes case K's mutated file, to look at or rerun.
+    if let (Some(k), Some(file)) = (
+        arg(&args, "--dump"),
+        args.iter().skip_while(|a| *a != "--dump").nth(2),
+    ) {
+        let corpus = Corpus::new(&root()).expect("seeds");
+        let (s, bytes, what) = corpus.case(seed, k.parse().expect("a case number"));
+        std::fs::write(file, &bytes).expect("writes the case");
+        println!("case {k}: {} ({what}) -> {file}", s.name);
+        return;
+    }
     if args.iter().any(|a| a == "--child") {
         let from: u64 = arg(&args, "--from").unwrap().parse().unwrap();
         let to: u64 = arg(&args, "--to").unwrap().parse().unwrap();
