@@ -10,6 +10,7 @@ use super::coded::add_code_sums;
 use super::downscale::factor;
 use super::sample::Gray;
 use std::borrow::Cow;
+use std::sync::{Arc, Mutex};
 
 /// The reduced search image of an 8-bit one-channel photo, built row by row.
 pub struct RowReduction {
@@ -103,5 +104,37 @@ impl RowReduction {
             },
             lut: self.lut,
         })
+    }
+}
+
+/// A row reduction handed to a decoder as its row observer (it runs on the
+/// decoder's thread) and taken back when the decode is over.
+#[derive(Default, Clone)]
+pub struct SharedReduction(Arc<Mutex<Option<RowReduction>>>);
+
+impl SharedReduction {
+    /// The row observer summing a `width` × `height` photo's 8-bit rows
+    /// through `lut` (256 entries) into the search image; `None` when the
+    /// search reads the photo unreduced.
+    pub fn observer(
+        &self,
+        width: usize,
+        height: usize,
+        lut: &[f32],
+    ) -> Option<zune_jpeg::RowObserver> {
+        *self.0.lock().ok()? = Some(RowReduction::new(width, height, lut)?);
+        let shared = Arc::clone(&self.0);
+        Some(Box::new(move |first: usize, rows: &[u8]| {
+            if let Ok(mut r) = shared.lock()
+                && let Some(r) = r.as_mut()
+            {
+                r.rows(first, rows);
+            }
+        }))
+    }
+
+    /// The search image, if every row it needs was shown, in order.
+    pub fn finish(&self) -> Option<ReducedSearch> {
+        self.0.lock().ok()?.take()?.finish()
     }
 }

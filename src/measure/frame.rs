@@ -14,14 +14,13 @@ use super::{
     resolve_distortion,
 };
 use crate::geometry::Point;
-use crate::locate::row_reduction::{ReducedSearch, RowReduction};
+use crate::locate::row_reduction::{ReducedSearch, SharedReduction};
 use crate::photo::decode::{DecodeError, Decoded, decode_bytes_observed};
 use crate::photo::jpeg::{JpegWant, ObserverFor};
 use crate::photo::linearise::{Channel, coded, default_tone, plane_names, planes_within};
 use crate::photo::{Plane, PlaneRef};
 use crate::target::Target;
 use std::path::Path;
-use std::sync::{Arc, Mutex};
 
 /// Reads and decodes a photo (not a raw) the target will be searched for,
 /// and resolves its pixel pitch from EXIF and the options: the photo, the
@@ -34,30 +33,15 @@ pub(super) fn decode_for_search(
     name: &str,
     opts: &MeasureOptions,
 ) -> Result<(Decoded, MeasureOptions, Said, Option<ReducedSearch>), MeasureError> {
-    let slot: Mutex<Option<RowReduction>> = Mutex::new(None);
-    let slot = Arc::new(slot);
-    let make = |w: usize, h: usize| -> Option<zune_jpeg::RowObserver> {
-        // The table the search reads a JPEG's luma through (an 8-bit file's
-        // default tone); a file that declares another is reduced later.
-        let lut = default_tone(8).0.lut(256);
-        *slot.lock().ok()? = Some(RowReduction::new(w, h, &lut)?);
-        let slot = Arc::clone(&slot);
-        Some(Box::new(move |first: usize, rows: &[u8]| {
-            if let Ok(mut r) = slot.lock()
-                && let Some(r) = r.as_mut()
-            {
-                r.rows(first, rows);
-            }
-        }))
-    };
+    let shared = SharedReduction::default();
+    // The table the search reads a JPEG's luma through (an 8-bit file's
+    // default tone); a file that declares another is reduced later.
+    let lut = default_tone(8).0.lut(256);
+    let make = |w: usize, h: usize| shared.observer(w, h, &lut);
     let bytes = read_photo(path, name)?;
     let (dec, o, said) = decode_bytes_with(&bytes, name, opts, Some(&make))?;
     // A decode with warnings may be a lenient retry, which the observer did not see.
-    let reduced = slot
-        .lock()
-        .ok()
-        .and_then(|mut r| r.take()?.finish())
-        .filter(|_| dec.warnings.is_empty());
+    let reduced = shared.finish().filter(|_| dec.warnings.is_empty());
     Ok((dec, o, said, reduced))
 }
 

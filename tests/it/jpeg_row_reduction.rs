@@ -7,9 +7,8 @@
 use super::jpeg_pipelined_idct::{damaged, encode};
 use jpeg_encoder::SamplingFactor;
 use std::borrow::Cow;
-use std::sync::{Arc, Mutex};
 use sweepmtf::locate::Source;
-use sweepmtf::locate::row_reduction::{ReducedSearch, RowReduction};
+use sweepmtf::locate::row_reduction::{ReducedSearch, SharedReduction};
 use sweepmtf::photo::decode::{Decoded, decode_bytes_observed};
 use sweepmtf::photo::jpeg::JpegWant;
 use sweepmtf::photo::linearise::{Channel, Tone, default_tone};
@@ -17,17 +16,9 @@ use sweepmtf::photo::linearise::{Channel, Tone, default_tone};
 /// The luma decode with a row reduction watching (as `measure` makes it),
 /// on a pool of two threads (the IDCT thread is used only there).
 fn observed(bytes: &[u8]) -> Option<(Decoded, Option<ReducedSearch>)> {
-    let slot: Arc<Mutex<Option<RowReduction>>> = Arc::new(Mutex::new(None));
-    let make = |w: usize, h: usize| -> Option<zune_jpeg::RowObserver> {
-        let lut = default_tone(8).0.lut(256);
-        *slot.lock().ok()? = Some(RowReduction::new(w, h, &lut)?);
-        let slot = Arc::clone(&slot);
-        Some(Box::new(move |first: usize, rows: &[u8]| {
-            if let Some(r) = slot.lock().unwrap().as_mut() {
-                r.rows(first, rows);
-            }
-        }))
-    };
+    let shared = SharedReduction::default();
+    let lut = default_tone(8).0.lut(256);
+    let make = |w: usize, h: usize| shared.observer(w, h, &lut);
     let want = JpegWant {
         rows: None,
         luma_only: true,
@@ -40,8 +31,7 @@ fn observed(bytes: &[u8]) -> Option<(Decoded, Option<ReducedSearch>)> {
         .install(|| decode_bytes_observed(bytes, "test.jpg", want, Some(&make)))
         .ok()?;
     // As `measure`: a decode with warnings may be a lenient retry, unseen.
-    let red = slot.lock().unwrap().take().and_then(|r| r.finish());
-    let red = red.filter(|_| dec.warnings.is_empty());
+    let red = shared.finish().filter(|_| dec.warnings.is_empty());
     Some((dec, red))
 }
 
