@@ -112,7 +112,7 @@ pub fn mtf_plot_with(
                 draw(&root, m, extras)?;
                 root.present().map_err(err)?;
             }
-            super::roi_plot::encode_png(buf, W, H)
+            crate::plot::encode_png(&buf, W, H).map_err(err)
         }
     }
 }
