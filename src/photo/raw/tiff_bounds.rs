@@ -40,7 +40,12 @@ fn type_size(t: u16) -> u64 {
 /// Bytes rawler takes a value of type `t` to hold when deciding whether the
 /// values sit in the entry itself (unknown types count as bytes).
 fn rawler_size(t: u16) -> u64 {
-    if t == 0 || t > 12 { 1 } else { type_size(t) }
+    if unknown_type(t) { 1 } else { type_size(t) }
+}
+
+/// Whether rawler reads type `t` as raw bytes of an unknown type.
+fn unknown_type(t: u16) -> bool {
+    t == 0 || t > 12
 }
 
 /// One directory as rawler reads it: where its sub-directories are, and
@@ -85,9 +90,9 @@ impl<R: Read + Seek> Walk<'_, R> {
         }
     }
 
-    /// Counts a directory read; too many is damage.
-    fn count_read(&mut self) -> Result<(), String> {
-        self.reads += 1;
+    /// Counts `n` directory reads; too many is damage.
+    fn count_reads(&mut self, n: usize) -> Result<(), String> {
+        self.reads += n;
         if self.reads > MAX_IFDS {
             return Err(format!("more than {MAX_IFDS} TIFF directories"));
         }
@@ -150,7 +155,7 @@ impl<R: Read + Seek> Walk<'_, R> {
                 7 => subs.push(data),
                 // Unknown types (IFD = 13 among them): rawler takes the
                 // first value byte as the offset.
-                t if (t == 0 || t > 12) && count > 0 => {
+                t if unknown_type(t) && count > 0 => {
                     if let Some([b]) = self.bytes::<1>(data) {
                         subs.push(b as u64);
                     }
@@ -175,12 +180,10 @@ impl<R: Read + Seek> Walk<'_, R> {
         }
         if let Some(&n) = self.done.get(&off) {
             // Read again by rawler, everything below it too.
-            for _ in 0..n {
-                self.count_read()?;
-            }
+            self.count_reads(n)?;
             return Ok(n);
         }
-        self.count_read()?;
+        self.count_reads(1)?;
         let Some(d) = self.dir(off)? else {
             return Ok(1);
         };
@@ -225,7 +228,7 @@ pub(crate) fn tiff_damage<R: Read + Seek>(r: &mut R, len: u64) -> Option<String>
                     "the TIFF's chain of directories loops back to byte {next}"
                 ));
             }
-            w.count_read()?;
+            w.count_reads(1)?;
             let Some(d) = w.dir(next)? else {
                 break;
             };
