@@ -426,7 +426,7 @@ fn mixed(mix: &[(usize, f32)], lin: impl Fn(usize) -> f32) -> f32 {
 }
 
 /// Converts one row of interleaved codes to a weighted sum of linear channels.
-#[inline]
+#[inline(always)]
 pub(crate) fn convert_row<T: Copy + Into<usize>>(
     out: &mut [f32],
     codes: &[T],

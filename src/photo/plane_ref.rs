@@ -73,7 +73,7 @@ impl<'a> PlaneRef<'a> {
 
     /// The values of samples i0 .. i0 + out.len() of row j: a slice of the
     /// plane itself for linear data, else `out` filled with the converted codes.
-    #[inline]
+    #[inline(always)]
     pub fn values<'b>(&'b self, j: usize, i0: usize, out: &'b mut [f32]) -> &'b [f32]
     where
         'a: 'b,
@@ -93,6 +93,32 @@ impl<'a> PlaneRef<'a> {
         }
     }
 
+    /// Asks the CPU to bring sample (i, j)'s cache line in ahead of its use
+    /// (a hint: no effect on any value, nothing read if (i, j) is outside).
+    #[inline(always)]
+    pub fn prefetch(&self, i: usize, j: usize) {
+        let k = j * self.width + i;
+        let p: *const i8 = match self.data {
+            PlaneData::Linear(d) => d
+                .get(k)
+                .map_or(std::ptr::null(), |v| (v as *const f32).cast()),
+            PlaneData::Codes8(c) => c
+                .codes
+                .get(k * c.channels)
+                .map_or(std::ptr::null(), |v| (v as *const u8).cast()),
+            PlaneData::Codes16(c) => c
+                .codes
+                .get(k * c.channels)
+                .map_or(std::ptr::null(), |v| (v as *const u16).cast()),
+        };
+        #[cfg(target_arch = "x86_64")]
+        if !p.is_null() {
+            // SAFETY: a prefetch never faults and reads nothing into the
+            // program's state; `p` points into the plane besides.
+            unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p) };
+        }
+    }
+
     /// The value of sample (i, j).
     #[inline]
     pub fn at(&self, i: usize, j: usize) -> f32 {
@@ -103,7 +129,7 @@ impl<'a> PlaneRef<'a> {
 
 impl<T: Copy + Into<usize>> Codes<'_, T> {
     /// Converts the samples from index `k` on into `out`.
-    #[inline]
+    #[inline(always)]
     fn convert(&self, k: usize, out: &mut [f32]) {
         let nc = self.channels;
         let codes = &self.codes[k * nc..(k + out.len()) * nc];

@@ -52,6 +52,9 @@ impl Default for BinAcc {
     }
 }
 
+/// A min or max of two values.
+type MinMax = fn(f32, f32) -> f32;
+
 /// The larger of two values, as one `maxss` (no NaN reaches here).
 #[inline(always)]
 fn fmax(a: f32, b: f32) -> f32 {
@@ -77,20 +80,35 @@ impl BinAcc {
     /// into the sorted extremes).
     #[inline(always)]
     pub(super) fn add(&mut self, s: f64, v: f32) {
+        self.add_by::<false>(s, v);
+    }
+
+    /// [`BinAcc::add`], the extremes' min/max taken as `f32::min`/`max`
+    /// when `NATIVE` (one `vminps`/`vmaxps` each with AVX2, where the plain
+    /// comparison is turned into masked stores that are slow on AMD cores;
+    /// without AVX2 the comparison is one `minps`/`maxps` and `f32::max`
+    /// three). The same values either way: no NaN reaches here.
+    #[inline(always)]
+    pub(super) fn add_by<const NATIVE: bool>(&mut self, s: f64, v: f32) {
         let vd = v as f64;
         self.sum += vd;
         self.sum2 += vd * vd;
         self.ssum += s;
         self.ssum2 += s * s;
         self.n += 1;
+        let (max, min): (MinMax, MinMax) = if NATIVE {
+            (f32::max, f32::min)
+        } else {
+            (fmax, fmin)
+        };
         // Lane k takes the larger of itself and the smaller of lane k − 1
         // (before this sample) and v; lane 0 the larger of itself and v.
         let (h, l) = (self.hi, self.lo);
         let sh = [f32::INFINITY, h[0], h[1], h[2], h[3], h[4], h[5], h[6]];
         let sl = [f32::NEG_INFINITY, l[0], l[1], l[2], l[3], l[4], l[5], l[6]];
         for k in 0..LANES {
-            self.hi[k] = fmax(h[k], fmin(sh[k], v));
-            self.lo[k] = fmin(l[k], fmax(sl[k], v));
+            self.hi[k] = max(h[k], min(sh[k], v));
+            self.lo[k] = min(l[k], max(sl[k], v));
         }
     }
 }

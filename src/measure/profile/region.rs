@@ -157,8 +157,8 @@ impl Region<'_> {
 
     /// Calls f(bin, s, value) for every sample of one band, in blocks of
     /// TILE × TILE samples so that the bins a block touches stay in cache.
-    #[inline]
-    pub(super) fn visit_band<F: FnMut(usize, f64, f32)>(&self, band: &Band, mut f: F) {
+    #[inline(always)]
+    pub(super) fn visit_band<F: Sink>(&self, band: &Band, mut f: F) {
         let m = &self.m;
         let inv_bin = 1.0 / self.bin;
         let last = self.nbins - 1;
@@ -177,6 +177,8 @@ impl Region<'_> {
                 }
                 let j = band.first + dj;
                 let y = oy + j as f64 * sy;
+                // The next tile's samples of this row, fetched while this one's are binned.
+                plane.prefetch(c1, j);
                 let mut v_buf = [0.0f32; TILE];
                 let row = plane.values(j, i0, &mut v_buf[..i1 - i0]);
                 // Along a row the homography's numerator and denominator are
@@ -191,10 +193,23 @@ impl Region<'_> {
                     *s = (m[0] * x + ns0) / (m[6] * x + w0);
                 }
                 for (&s, &v) in s_run.iter().zip(row) {
-                    f(((s * inv_bin) as usize).min(last), s, v);
+                    f.sample(((s * inv_bin) as usize).min(last), s, v);
                 }
             }
         }
+    }
+}
+
+/// What takes the samples [`Region::visit_band`] hands out: (bin, s, value).
+pub(super) trait Sink {
+    /// Takes one sample: its bin, its position `s` (strip units) and its linear value.
+    fn sample(&mut self, bin: usize, s: f64, v: f32);
+}
+
+impl<F: FnMut(usize, f64, f32)> Sink for F {
+    #[inline(always)]
+    fn sample(&mut self, bin: usize, s: f64, v: f32) {
+        self(bin, s, v)
     }
 }
 
