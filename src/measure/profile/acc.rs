@@ -52,9 +52,6 @@ impl Default for BinAcc {
     }
 }
 
-/// A min or max of two values.
-type MinMax = fn(f32, f32) -> f32;
-
 /// The larger of two values, as one `maxss` (no NaN reaches here).
 #[inline(always)]
 fn fmax(a: f32, b: f32) -> f32 {
@@ -83,33 +80,72 @@ impl BinAcc {
         self.add_by::<false>(s, v);
     }
 
-    /// [`BinAcc::add`], the extremes' min/max taken as `f32::min`/`max`
-    /// when `NATIVE` (one `vminps`/`vmaxps` each with AVX2, where the plain
-    /// comparison is turned into masked stores that are slow on AMD cores;
-    /// without AVX2 the comparison is one `minps`/`maxps` and `f32::max`
-    /// three). The same values either way: no NaN reaches here.
+    /// [`BinAcc::add`], with the extremes' insertion in AVX2 when `AVX2`
+    /// (only instantiated inside a function compiled for AVX2). The same
+    /// values either way: no NaN reaches here.
     #[inline(always)]
-    pub(super) fn add_by<const NATIVE: bool>(&mut self, s: f64, v: f32) {
+    pub(super) fn add_by<const AVX2: bool>(&mut self, s: f64, v: f32) {
         let vd = v as f64;
         self.sum += vd;
         self.sum2 += vd * vd;
         self.ssum += s;
         self.ssum2 += s * s;
         self.n += 1;
-        let (max, min): (MinMax, MinMax) = if NATIVE {
-            (f32::max, f32::min)
-        } else {
-            (fmax, fmin)
-        };
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: `AVX2` is set only in code compiled for, and run on, a
+            // CPU with AVX2 (`profile::first_pass`).
+            unsafe { insert_avx2(&mut self.hi, &mut self.lo, v) };
+            return;
+        }
         // Lane k takes the larger of itself and the smaller of lane k − 1
         // (before this sample) and v; lane 0 the larger of itself and v.
         let (h, l) = (self.hi, self.lo);
         let sh = [f32::INFINITY, h[0], h[1], h[2], h[3], h[4], h[5], h[6]];
         let sl = [f32::NEG_INFINITY, l[0], l[1], l[2], l[3], l[4], l[5], l[6]];
         for k in 0..LANES {
-            self.hi[k] = max(h[k], min(sh[k], v));
-            self.lo[k] = min(l[k], max(sl[k], v));
+            self.hi[k] = fmax(h[k], fmin(sh[k], v));
+            self.lo[k] = fmin(l[k], fmax(sl[k], v));
         }
+    }
+}
+
+/// The extremes' insertion of [`BinAcc::add`] as eight-lane AVX2 vectors:
+/// each array shifted up a lane (±∞ in lane 0), then one min and one max
+/// (`vminps`/`vmaxps`: the same comparisons as [`fmin`]/[`fmax`], operand
+/// order included).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn insert_avx2(hi: &mut [f32; LANES], lo: &mut [f32; LANES], v: f32) {
+    use std::arch::x86_64::*;
+    const _: () = assert!(LANES == 8);
+    let up = _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6);
+    // SAFETY: [f32; 8] and __m256 have the same size; every bit pattern is valid in both.
+    let (h, l) = unsafe {
+        (
+            std::mem::transmute::<[f32; LANES], __m256>(*hi),
+            std::mem::transmute::<[f32; LANES], __m256>(*lo),
+        )
+    };
+    let vv = _mm256_set1_ps(v);
+    let sh = _mm256_blend_ps::<1>(
+        _mm256_permutevar8x32_ps(h, up),
+        _mm256_set1_ps(f32::INFINITY),
+    );
+    let sl = _mm256_blend_ps::<1>(
+        _mm256_permutevar8x32_ps(l, up),
+        _mm256_set1_ps(f32::NEG_INFINITY),
+    );
+    // fmax(a, b) = if a > b { a } else { b } = _mm256_max_ps(a, b) lane by
+    // lane (maxps returns its second operand unless the first is greater);
+    // fmin likewise.
+    let nh = _mm256_max_ps(h, _mm256_min_ps(sh, vv));
+    let nl = _mm256_min_ps(l, _mm256_max_ps(sl, vv));
+    // SAFETY: as above.
+    unsafe {
+        *hi = std::mem::transmute::<__m256, [f32; LANES]>(nh);
+        *lo = std::mem::transmute::<__m256, [f32; LANES]>(nl);
     }
 }
 
