@@ -98,6 +98,15 @@ impl PhaseTable {
 /// Parameters of the local model: mean, its slope, the sine's two quadratures.
 const N: usize = 4;
 
+/// One bin inside a local fit's window: its regressors (1, x, cos, sin),
+/// biweight taper, sample count and value.
+struct Row {
+    x: [f64; N],
+    taper: f64,
+    count: f64,
+    y: f64,
+}
+
 /// Fits the sine at `s0` over ±`half_cycles` of phase, with biweight weights
 /// (1 − u²)² in phase (u = phase distance / half window) times the bin counts.
 pub fn local_fit(
@@ -119,19 +128,26 @@ pub fn local_fit(
         return None;
     }
     let scale = (prof.s[b - 1] - prof.s[a]).max(1e-300);
-    let row = |k: usize| -> ([f64; N], f64) {
-        let u = (phases[k] - p0) / half_cycles;
-        let taper = (1.0 - u * u).max(0.0).powi(2);
-        let x = (prof.s[k] - s0) / scale;
-        ([1.0, x, table.cos[k], table.sin[k]], taper)
-    };
+    // Each bin's regressors and weights, made once for the three passes.
+    let rows: Vec<Row> = (a..b)
+        .map(|k| {
+            let u = (phases[k] - p0) / half_cycles;
+            let taper = (1.0 - u * u).max(0.0).powi(2);
+            let x = (prof.s[k] - s0) / scale;
+            Row {
+                x: [1.0, x, table.cos[k], table.sin[k]],
+                taper,
+                count: prof.count[k],
+                y: prof.y[k],
+            }
+        })
+        .collect();
     let mut ata = [[0.0f64; N]; N];
     let mut aty = [0.0f64; N];
-    for k in a..b {
-        let (x, taper) = row(k);
-        let w = taper * prof.count[k];
+    for r in &rows {
+        let (x, w) = (&r.x, r.taper * r.count);
         for i in 0..N {
-            aty[i] += w * x[i] * prof.y[k];
+            aty[i] += w * x[i] * r.y;
             for j in i..N {
                 ata[i][j] += w * x[i] * x[j];
             }
@@ -143,19 +159,17 @@ pub fn local_fit(
         }
     }
     let inv = invert(ata)?;
-    let mut c: Vec<f64> = (0..N)
-        .map(|i| (0..N).map(|j| inv[i][j] * aty[j]).sum())
-        .collect();
+    let mut c: [f64; N] = std::array::from_fn(|i| (0..N).map(|j| inv[i][j] * aty[j]).sum());
     // Uneven light multiplies the sine as it does the mean: the data hold
     // g·x·(a cos + b sin) beside the model, g = c1/c0 the light's relative
     // slope. What of it leaked into the fit (one projection) is taken out.
     if c[0] > 0.0 {
         let g = c[1] / c[0];
         let mut atz = [0.0f64; N];
-        for k in a..b {
-            let (x, taper) = row(k);
+        for r in &rows {
+            let x = &r.x;
             let z = g * x[1] * (c[2] * x[2] + c[3] * x[3]);
-            let w = taper * prof.count[k];
+            let w = r.taper * r.count;
             for i in 0..N {
                 atz[i] += w * x[i] * z;
             }
@@ -168,14 +182,14 @@ pub fn local_fit(
     let mut rss = 0.0;
     let mut wsum = 0.0;
     let mut meat = [[0.0f64; N]; N];
-    for k in a..b {
-        let (x, taper) = row(k);
+    for r in &rows {
+        let (x, taper) = (&r.x, r.taper);
         let pred: f64 = (0..N).map(|i| c[i] * x[i]).sum();
-        let r = prof.y[k] - pred;
-        rss += taper * prof.count[k] * r * r;
+        let res = r.y - pred;
+        rss += taper * r.count * res * res;
         wsum += taper;
         // Var(bin mean) = σ²/count; weight w = taper·count → w²σ²/count = taper²·count·σ².
-        let q = taper * taper * prof.count[k];
+        let q = taper * taper * r.count;
         for i in 0..N {
             for j in i..N {
                 meat[i][j] += q * x[i] * x[j];
@@ -213,17 +227,17 @@ pub fn local_fit(
 }
 
 /// Inverts a symmetric N×N matrix (Gauss–Jordan with pivoting, column-scaled).
-fn invert<const M: usize>(m: [[f64; M]; M]) -> Option<[[f64; M]; M]> {
-    let d: Vec<f64> = (0..M).map(|i| m[i][i].abs().sqrt().max(1e-300)).collect();
-    let mut a = vec![vec![0.0f64; 2 * M]; M];
-    for i in 0..M {
-        for j in 0..M {
+fn invert(m: [[f64; N]; N]) -> Option<[[f64; N]; N]> {
+    let d: [f64; N] = std::array::from_fn(|i| m[i][i].abs().sqrt().max(1e-300));
+    let mut a = [[0.0f64; 2 * N]; N];
+    for i in 0..N {
+        for j in 0..N {
             a[i][j] = m[i][j] / (d[i] * d[j]);
         }
-        a[i][M + i] = 1.0;
+        a[i][N + i] = 1.0;
     }
-    for col in 0..M {
-        let piv = (col..M).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+    for col in 0..N {
+        let piv = (col..N).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[piv][col].abs() < 1e-12 {
             return None;
         }
@@ -232,7 +246,7 @@ fn invert<const M: usize>(m: [[f64; M]; M]) -> Option<[[f64; M]; M]> {
         for v in a[col].iter_mut() {
             *v /= p;
         }
-        let pr = a[col].clone();
+        let pr = a[col];
         for (r, row) in a.iter_mut().enumerate() {
             if r != col {
                 let f = row[col];
@@ -244,10 +258,10 @@ fn invert<const M: usize>(m: [[f64; M]; M]) -> Option<[[f64; M]; M]> {
             }
         }
     }
-    let mut inv = [[0.0f64; M]; M];
-    for i in 0..M {
-        for j in 0..M {
-            inv[i][j] = a[i][M + j] / (d[i] * d[j]);
+    let mut inv = [[0.0f64; N]; N];
+    for i in 0..N {
+        for j in 0..N {
+            inv[i][j] = a[i][N + j] / (d[i] * d[j]);
         }
     }
     Some(inv)
