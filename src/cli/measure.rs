@@ -257,8 +257,11 @@ pub fn save_outputs(
             summary_text.push('\n');
             let summary_file = (out("summary.json"), summary_text.into_bytes());
             let paths: Vec<PathBuf> = files.iter().map(|f| f.0.clone()).collect();
-            let (body, last) = rayon::join(|| stage(&files), || stage(&[summary_file]));
-            Ok((body?, last?, paths, summary_value))
+            let n = files.len();
+            files.push(summary_file);
+            let mut body = stage(&files)?;
+            let last = body.split_off(n);
+            Ok((body, last, paths, summary_value))
         },
     );
     let (body, last, mut paths, summary_value) = rest.map_err(out_err)?;

@@ -71,28 +71,45 @@ pub struct Staged {
     files: Vec<(PathBuf, PathBuf)>,
 }
 
-/// Writes `files` to synced temporaries (in parallel: each `sync_all` may
-/// wait for the file system's journal, and one wait then serves them all);
-/// on any failure none is kept.
+/// Writes `files` to synced temporaries, each on its own thread (not the
+/// rayon pool's, which may be busy drawing a picture: each `sync_all` waits
+/// for the file system's journal, and one wait then serves them all); on
+/// any failure none is kept.
 pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged, ReportError> {
-    use rayon::prelude::*;
-    let written: Vec<std::io::Result<PathBuf>> = files
-        .par_iter()
-        .map(|(path, bytes)| {
-            let tmp = temp_name(path);
-            let res = std::fs::File::create(&tmp).and_then(|mut f| {
-                f.write_all(bytes)?;
-                f.sync_all()
-            });
-            match res {
-                Ok(()) => Ok(tmp),
-                Err(e) => {
-                    let _ = std::fs::remove_file(&tmp);
-                    Err(e)
-                }
+    let write = |(path, bytes): &(PathBuf, Vec<u8>)| -> std::io::Result<PathBuf> {
+        let tmp = temp_name(path);
+        let res = std::fs::File::create(&tmp).and_then(|mut f| {
+            f.write_all(bytes)?;
+            f.sync_all()
+        });
+        match res {
+            Ok(()) => Ok(tmp),
+            Err(e) => {
+                let _ = std::fs::remove_file(&tmp);
+                Err(e)
             }
-        })
-        .collect();
+        }
+    };
+    let written: Vec<std::io::Result<PathBuf>> = std::thread::scope(|scope| {
+        let others: Vec<_> = files
+            .iter()
+            .skip(1)
+            .map(|f| std::thread::Builder::new().spawn_scoped(scope, move || write(f)))
+            .collect();
+        let first = files.first().map(write);
+        first
+            .into_iter()
+            .chain(others.into_iter().zip(files.iter().skip(1)).map(|(h, f)| {
+                // No thread to spare (or a lost one): written here instead.
+                match h {
+                    Ok(h) => h
+                        .join()
+                        .unwrap_or_else(|_| Err(std::io::Error::other("a writer thread failed"))),
+                    Err(_) => write(f),
+                }
+            }))
+            .collect()
+    });
     let mut staged = Staged::default();
     for ((path, _), r) in files.iter().zip(written) {
         // A failure drops `staged`, which removes the temporaries made so far.
@@ -103,6 +120,13 @@ pub fn stage(files: &[(PathBuf, Vec<u8>)]) -> Result<Staged, ReportError> {
 }
 
 impl Staged {
+    /// Splits off the files from `at` on (to be committed after others).
+    pub fn split_off(&mut self, at: usize) -> Staged {
+        Staged {
+            files: self.files.split_off(at.min(self.files.len())),
+        }
+    }
+
     /// These files followed by `other`'s, to be committed together.
     pub fn then(mut self, mut other: Staged) -> Staged {
         self.files.append(&mut other.files);
