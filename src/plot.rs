@@ -45,7 +45,10 @@ fn encode_png_with(rgb: &[u8], w: u32, h: u32, level: png::Compression) -> Resul
     if rgb.len() as u64 != w as u64 * h as u64 * 3 {
         return Err(format!("{} bytes for a {w}×{h} RGB picture", rgb.len()));
     }
-    let mut out = Vec::new();
+    // Room for the whole file at once (a photograph compresses to about a
+    // third of its bytes; a plot to far less): growing the vector by
+    // doubling copied it each time into freshly faulted pages.
+    let mut out = Vec::with_capacity(rgb.len() / 2 + 4096);
     {
         let mut enc = png::Encoder::new(&mut out, w, h);
         enc.set_color(png::ColorType::Rgb);

@@ -102,11 +102,13 @@ impl IdctBatch {
     /// thread that fills it does not take those faults.
     #[cfg(feature = "std")]
     fn touched(blocks: usize, per_block: usize) -> IdctBatch {
-        let mut b = IdctBatch {
-            rows: Vec::new(),
-            coeffs: alloc::vec![0; blocks * per_block],
-            blocks: alloc::vec![(0, 0); blocks]
-        };
+        // Written with `resize`, not made by `vec![0; n]`: that asks the
+        // allocator for zeroed memory, which fresh memory already is, so
+        // nothing was written and the pages still faulted in on the thread
+        // that filled the batch.
+        let mut b = IdctBatch::with_capacity(blocks, per_block);
+        b.coeffs.resize(blocks * per_block, 0);
+        b.blocks.resize(blocks, (0, 0));
         b.clear();
         b
     }
