@@ -97,26 +97,27 @@ impl<'a> PlaneRef<'a> {
     /// (a hint: no effect on any value, nothing read if (i, j) is outside).
     #[inline(always)]
     pub fn prefetch(&self, i: usize, j: usize) {
-        let k = j * self.width + i;
-        let p: *const i8 = match self.data {
-            PlaneData::Linear(d) => d
-                .get(k)
-                .map_or(std::ptr::null(), |v| (v as *const f32).cast()),
-            PlaneData::Codes8(c) => c
-                .codes
-                .get(k * c.channels)
-                .map_or(std::ptr::null(), |v| (v as *const u8).cast()),
-            PlaneData::Codes16(c) => c
-                .codes
-                .get(k * c.channels)
-                .map_or(std::ptr::null(), |v| (v as *const u16).cast()),
-        };
         #[cfg(target_arch = "x86_64")]
-        if !p.is_null() {
-            // SAFETY: a prefetch never faults and reads nothing into the
-            // program's state; `p` points into the plane besides.
-            unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p) };
+        {
+            let k = j * self.width + i;
+            let p: Option<*const i8> = match self.data {
+                PlaneData::Linear(d) => d.get(k).map(|v| (v as *const f32).cast()),
+                PlaneData::Codes8(c) => {
+                    c.codes.get(k * c.channels).map(|v| (v as *const u8).cast())
+                }
+                PlaneData::Codes16(c) => c
+                    .codes
+                    .get(k * c.channels)
+                    .map(|v| (v as *const u16).cast()),
+            };
+            if let Some(p) = p {
+                // SAFETY: a prefetch never faults and changes nothing the
+                // program can see; `p` points into the plane besides.
+                unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p) };
+            }
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (i, j);
     }
 
     /// The value of sample (i, j).
