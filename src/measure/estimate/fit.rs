@@ -83,7 +83,7 @@ impl PhaseTable {
                 } else {
                     1.0
                 };
-                let (sn, cs) = (2.0 * PI * (ph - ph.floor())).sin_cos();
+                let (sn, cs) = super::turns::sin_cos_turns(ph);
                 (ph, att * cs, att * sn)
             })
             .collect();

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 pub mod envelope;
 pub mod extrema;
 pub mod fit;
+pub mod turns;
 
 /// One modulation sample along the strip.
 #[derive(Debug, Clone, Copy, PartialEq)]
