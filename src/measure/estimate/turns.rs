@@ -26,14 +26,22 @@ const C4: f64 = -2.755_731_435_139_066_330_35e-7;
 const C5: f64 = 2.087_572_321_298_174_827_90e-9;
 const C6: f64 = -1.135_964_755_778_819_482_65e-11;
 
-/// (sin 2πt, cos 2πt) for a phase `t` in turns (any finite value; exact
-/// reduction for |t| < 2⁵²).
+/// (sin 2πt, cos 2πt) for a phase `t` in turns (any value; the exact
+/// reduction below 4.5e15 turns, libm's beyond).
 #[inline]
 pub fn sin_cos_turns(t: f64) -> (f64, f64) {
-    let t = t - t.floor();
-    // Quadrant q (0–4) and the rest u = t − q/4, exact (|u| ≤ 1/8: both
-    // terms within a factor of two of each other, or q = 0).
-    let q = (4.0 * t).round();
+    if !(t.abs() < 4.5e15) {
+        let (s, c) = (TAU * (t - t.floor())).sin_cos();
+        return (s, c);
+    }
+    // The fraction, by integer conversion (baseline x86-64 has no rounding
+    // instruction: `floor` and `round` are calls): exact below 2⁵².
+    let whole = t as i64 as f64;
+    let t = t - if whole > t { whole - 1.0 } else { whole };
+    // Quadrant q (0–4; either neighbour at a tie) and the rest u = t − q/4,
+    // exact (|u| ≤ 1/8: both terms within a factor of two of each other,
+    // or q = 0).
+    let q = (4.0 * t + 0.5) as i64 as f64;
     let u = t - 0.25 * q;
     let x = TAU * u;
     let z = x * x;
@@ -77,5 +85,10 @@ mod tests {
             assert!((s * s + c * c - 1.0).abs() < 1e-15, "{t}");
         }
         assert!(worst < 1e-15, "{worst:e}");
+        // Huge and non-finite phases go to libm.
+        for t in [1e16, -3e17, f64::MAX] {
+            assert_eq!(sin_cos_turns(t), (TAU * (t - t.floor())).sin_cos());
+        }
+        assert!(sin_cos_turns(f64::NAN).0.is_nan());
     }
 }
