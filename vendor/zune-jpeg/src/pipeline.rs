@@ -294,6 +294,9 @@ mod threaded {
                 let blocks_per_row = self.components[0].width_stride / 8
                     * self.components[0].vertical_sample;
                 let rows_per_batch = (BLOCKS / blocks_per_row.max(1)).max(1);
+                // The blocks a batch can hold: a whole batch, or the whole
+                // image when it is smaller (no memory made for rows it lacks).
+                let batch_blocks = (rows_per_batch.min(mcu_height) * blocks_per_row).max(1);
                 let rows_per_mcu = if let SampleRatios::Generic(_, v) = self.info.sample_ratio {
                     8 * v * self.coeff
                 } else {
@@ -310,7 +313,8 @@ mod threaded {
                         // the others are made here, their pages faulted in
                         // off the entropy decoding's path.
                         for _ in 1..BATCHES {
-                            let _ = to_main.send(IdctBatch::touched(BLOCKS, TOUCHED_PER_BLOCK));
+                            let _ =
+                                to_main.send(IdctBatch::touched(batch_blocks, TOUCHED_PER_BLOCK));
                         }
                         let mut sunk = Ok(());
                         for mut batch in from_main {
@@ -347,7 +351,7 @@ mod threaded {
                     // The first batch with room for a whole batch (its pages
                     // fault in as it fills; it is not reallocated).
                     let mut spare: Vec<IdctBatch> =
-                        alloc::vec![IdctBatch::with_capacity(BLOCKS, TOUCHED_PER_BLOCK)];
+                        alloc::vec![IdctBatch::with_capacity(batch_blocks, TOUCHED_PER_BLOCK)];
                     let mut exit = Exit::Done;
                     let mut batch = spare.pop();
                     for i in 0..mcu_height {
