@@ -4,7 +4,7 @@
 //! thread and of two, medians of N runs.
 //!
 //! ```sh
-//! cargo run --release --features examples --example bin_time -- [N]
+//! cargo run --release --features examples --example bin_time -- [N [DEGREES]]
 //! ```
 
 use std::time::Instant;
@@ -49,7 +49,10 @@ fn main() {
             lut: &lut,
         }),
     };
-    let a = 0.3f64.to_radians();
+    let a = std::env::args()
+        .nth(2)
+        .map_or(0.3, |s| s.parse::<f64>().expect("an angle in degrees"))
+        .to_radians();
     let (c, s) = (a.cos(), a.sin());
     let quad = [
         [x0, y0],

@@ -93,6 +93,18 @@ impl<'a> PlaneRef<'a> {
         }
     }
 
+    /// Writes the values of samples i0 .. i0 + out.len() of row j into `out`
+    /// (copied for linear data, converted from the codes otherwise).
+    #[inline(always)]
+    pub fn read_into(&self, j: usize, i0: usize, out: &mut [f32]) {
+        let k = j * self.width + i0;
+        match self.data {
+            PlaneData::Linear(d) => out.copy_from_slice(&d[k..k + out.len()]),
+            PlaneData::Codes8(c) => c.convert(k, out),
+            PlaneData::Codes16(c) => c.convert(k, out),
+        }
+    }
+
     /// Asks the CPU to bring sample (i, j)'s cache line in ahead of its use
     /// (a hint: no effect on any value, nothing read if (i, j) is outside).
     #[inline(always)]

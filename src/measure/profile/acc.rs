@@ -77,75 +77,90 @@ impl BinAcc {
     /// into the sorted extremes).
     #[inline(always)]
     pub(super) fn add(&mut self, s: f64, v: f32) {
-        self.add_by::<false>(s, v);
-    }
-
-    /// [`BinAcc::add`], with the extremes' insertion in AVX2 when `AVX2`
-    /// (only instantiated inside a function compiled for AVX2). The same
-    /// values either way: no NaN reaches here.
-    #[inline(always)]
-    pub(super) fn add_by<const AVX2: bool>(&mut self, s: f64, v: f32) {
-        let vd = v as f64;
-        self.sum += vd;
-        self.sum2 += vd * vd;
-        self.ssum += s;
-        self.ssum2 += s * s;
-        self.n += 1;
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            // SAFETY: `AVX2` is set only in code compiled for, and run on, a
-            // CPU with AVX2 (`profile::first_pass`).
-            unsafe { insert_avx2(&mut self.hi, &mut self.lo, v) };
-            return;
-        }
-        // Lane k takes the larger of itself and the smaller of lane k − 1
-        // (before this sample) and v; lane 0 the larger of itself and v.
-        let (h, l) = (self.hi, self.lo);
-        let sh = [f32::INFINITY, h[0], h[1], h[2], h[3], h[4], h[5], h[6]];
-        let sl = [f32::NEG_INFINITY, l[0], l[1], l[2], l[3], l[4], l[5], l[6]];
-        for k in 0..LANES {
-            self.hi[k] = fmax(h[k], fmin(sh[k], v));
-            self.lo[k] = fmin(l[k], fmax(sl[k], v));
-        }
+        self.add_run::<false>(&[s], &[v]);
     }
 }
 
-/// The extremes' insertion of [`BinAcc::add`] as eight-lane AVX2 vectors:
-/// each array shifted up a lane (±∞ in lane 0), then one min and one max
-/// (`vminps`/`vmaxps`: the same comparisons as [`fmin`]/[`fmax`], operand
-/// order included).
+impl BinAcc {
+    /// Adds consecutive samples (positions `s`, values `v`) in order, the
+    /// running values kept in registers over the run; the extremes' insertion
+    /// in AVX2 when `AVX2` (only instantiated inside a function compiled for,
+    /// and run on, a CPU with AVX2: `profile::first_pass`). The same values
+    /// either way: no NaN reaches here.
+    #[inline(always)]
+    pub(super) fn add_run<const AVX2: bool>(&mut self, s: &[f64], v: &[f32]) {
+        self.n += v.len() as u32;
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: `AVX2` is set only where the CPU has AVX2 (above).
+            unsafe { add_run_avx2(self, s, v) };
+            return;
+        }
+        let (mut sum, mut sum2, mut ssum, mut ssum2) = (self.sum, self.sum2, self.ssum, self.ssum2);
+        let (mut h, mut l) = (self.hi, self.lo);
+        for (&s, &v) in s.iter().zip(v) {
+            let vd = v as f64;
+            sum += vd;
+            sum2 += vd * vd;
+            ssum += s;
+            ssum2 += s * s;
+            let sh = [f32::INFINITY, h[0], h[1], h[2], h[3], h[4], h[5], h[6]];
+            let sl = [f32::NEG_INFINITY, l[0], l[1], l[2], l[3], l[4], l[5], l[6]];
+            // Lane k takes the larger of itself and the smaller of lane k − 1
+            // (before this sample) and v; lane 0 the larger of itself and v.
+            for k in 0..LANES {
+                h[k] = fmax(h[k], fmin(sh[k], v));
+                l[k] = fmin(l[k], fmax(sl[k], v));
+            }
+        }
+        (self.sum, self.sum2, self.ssum, self.ssum2) = (sum, sum2, ssum, ssum2);
+        (self.hi, self.lo) = (h, l);
+    }
+}
+
+/// [`BinAcc::add_run`] with the extremes as eight-lane AVX2 vectors held in
+/// registers over the run. Each insertion is the median of a lane, the lane
+/// before it (±∞ before lane 0) and the value: `min(max(h, v), h shifted
+/// up)` for the largest, which equals the plain code's `max(h, min(h
+/// shifted up, v))` lane by lane on the sorted lanes, with one operation
+/// fewer on the chain from one sample to the next (`vminps`/`vmaxps` are
+/// [`fmin`]/[`fmax`] lane by lane; no NaN reaches here).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn insert_avx2(hi: &mut [f32; LANES], lo: &mut [f32; LANES], v: f32) {
+fn add_run_avx2(a: &mut BinAcc, s: &[f64], v: &[f32]) {
     use std::arch::x86_64::*;
     const _: () = assert!(LANES == 8);
     let up = _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6);
     // SAFETY: [f32; 8] and __m256 have the same size; every bit pattern is valid in both.
-    let (h, l) = unsafe {
+    let (mut h, mut l) = unsafe {
         (
-            std::mem::transmute::<[f32; LANES], __m256>(*hi),
-            std::mem::transmute::<[f32; LANES], __m256>(*lo),
+            std::mem::transmute::<[f32; LANES], __m256>(a.hi),
+            std::mem::transmute::<[f32; LANES], __m256>(a.lo),
         )
     };
-    let vv = _mm256_set1_ps(v);
-    let sh = _mm256_blend_ps::<1>(
-        _mm256_permutevar8x32_ps(h, up),
+    let (pinf, ninf) = (
         _mm256_set1_ps(f32::INFINITY),
-    );
-    let sl = _mm256_blend_ps::<1>(
-        _mm256_permutevar8x32_ps(l, up),
         _mm256_set1_ps(f32::NEG_INFINITY),
     );
-    // fmax(a, b) = if a > b { a } else { b } = _mm256_max_ps(a, b) lane by
-    // lane (maxps returns its second operand unless the first is greater);
-    // fmin likewise.
-    let nh = _mm256_max_ps(h, _mm256_min_ps(sh, vv));
-    let nl = _mm256_min_ps(l, _mm256_max_ps(sl, vv));
+    let (mut sum, mut sum2, mut ssum, mut ssum2) = (a.sum, a.sum2, a.ssum, a.ssum2);
+    for (&s, &v) in s.iter().zip(v) {
+        let vd = v as f64;
+        sum += vd;
+        sum2 += vd * vd;
+        ssum += s;
+        ssum2 += s * s;
+        let vv = _mm256_set1_ps(v);
+        let sh = _mm256_blend_ps::<1>(_mm256_permutevar8x32_ps(h, up), pinf);
+        let sl = _mm256_blend_ps::<1>(_mm256_permutevar8x32_ps(l, up), ninf);
+        h = _mm256_min_ps(_mm256_max_ps(h, vv), sh);
+        l = _mm256_max_ps(_mm256_min_ps(l, vv), sl);
+    }
+    (a.sum, a.sum2, a.ssum, a.ssum2) = (sum, sum2, ssum, ssum2);
     // SAFETY: as above.
     unsafe {
-        *hi = std::mem::transmute::<__m256, [f32; LANES]>(nh);
-        *lo = std::mem::transmute::<__m256, [f32; LANES]>(nl);
+        a.hi = std::mem::transmute::<__m256, [f32; LANES]>(h);
+        a.lo = std::mem::transmute::<__m256, [f32; LANES]>(l);
     }
 }
 

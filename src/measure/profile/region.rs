@@ -18,6 +18,9 @@ pub(super) struct Region<'a> {
     pub(super) s_hi: f64,
     pub(super) bin: f64,
     pub(super) nbins: usize,
+    /// Whether `s` changes faster across the columns than across the rows
+    /// (then [`Region::visit_band_runs`] walks down the columns).
+    pub(super) by_columns: bool,
 }
 
 impl Region<'_> {
@@ -198,6 +201,146 @@ impl Region<'_> {
             }
         }
     }
+}
+
+impl Region<'_> {
+    /// The bin of position `s` (strip units): `((s / bin) as usize).min(last)`
+    /// written so that it vectorises (the same value for every `s`, NaN included).
+    #[inline(always)]
+    fn bin_index(s: f64, inv_bin: f64, last: f64) -> u32 {
+        let t = (s * inv_bin).max(0.0).min(last);
+        // SAFETY: t is finite and within [0, last], and last < 2³² (checked by
+        // the caller, `visit_band_runs`).
+        unsafe { t.to_int_unchecked::<u32>() }
+    }
+
+    /// Hands every sample of one band to `f` in runs of consecutive samples
+    /// of one bin: down each column of a tile when `self.by_columns` (a sweep
+    /// across the columns: a column's samples share a bin for many rows),
+    /// else along each row. Each bin gets its samples in increasing row
+    /// order within a column (or column order within a row).
+    #[inline(always)]
+    pub(super) fn visit_band_runs<F: RunSink>(&self, band: &Band, f: &mut F) {
+        if self.nbins > u32::MAX as usize {
+            return self.visit_band(band, |b: usize, s: f64, v: f32| f.run(b, &[s], &[v]));
+        }
+        let m = &self.m;
+        let inv_bin = 1.0 / self.bin;
+        let last = (self.nbins - 1) as f64;
+        let plane = self.planes[band.plane];
+        let (ox, oy, sx, sy) = plane.centres();
+        let rows = &band.rows;
+        let lo = rows.iter().filter(|r| r.0 < r.1).map(|r| r.0).min();
+        let hi = rows.iter().map(|r| r.1).max().unwrap_or(0);
+        let Some(lo) = lo else { return };
+        let mut s_buf = [0.0f64; TILE];
+        let mut b_buf = [0u32; TILE];
+        let mut v_buf = [0.0f32; TILE];
+        if !self.by_columns {
+            for c0 in (lo..hi).step_by(TILE) {
+                let c1 = (c0 + TILE).min(hi);
+                for (dj, &(i0, i1)) in rows.iter().enumerate() {
+                    let (i0, i1) = (i0.max(c0), i1.min(c1));
+                    if i0 >= i1 {
+                        continue;
+                    }
+                    let j = band.first + dj;
+                    let y = oy + j as f64 * sy;
+                    plane.prefetch(c1, j);
+                    let n = i1 - i0;
+                    plane.read_into(j, i0, &mut v_buf[..n]);
+                    let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
+                    for (k, s) in s_buf[..n].iter_mut().enumerate() {
+                        let x = ox + (i0 + k) as f64 * sx;
+                        *s = (m[0] * x + ns0) / (m[6] * x + w0);
+                    }
+                    hand_out_runs(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                }
+            }
+            return;
+        }
+        // Down the columns: each tile's values are read row by row first.
+        let nr = rows.len();
+        let mut tile = [[0.0f32; TILE]; TILE];
+        let (mut ns, mut w) = ([0.0f64; TILE], [0.0f64; TILE]);
+        let (mut ns_c, mut w_c) = ([0.0f64; TILE], [0.0f64; TILE]);
+        for (dj, n) in ns.iter_mut().zip(&mut w).enumerate().take(nr) {
+            let y = oy + (band.first + dj) as f64 * sy;
+            *n.0 = m[1] * y + m[2];
+            *n.1 = m[7] * y + m[8];
+        }
+        for c0 in (lo..hi).step_by(TILE) {
+            let c1 = (c0 + TILE).min(hi);
+            for (dj, &(i0, i1)) in rows.iter().enumerate() {
+                let (i0, i1) = (i0.max(c0), i1.min(c1));
+                if i0 < i1 {
+                    let j = band.first + dj;
+                    plane.prefetch(c1, j);
+                    plane.read_into(j, i0, &mut tile[dj][i0 - c0..i1 - c0]);
+                }
+            }
+            // Whether every row holds the whole tile (then no packing).
+            let full = rows.iter().all(|&(i0, i1)| i0 <= c0 && i1 >= c1);
+            for k in c0..c1 {
+                let x = ox + k as f64 * sx;
+                let (a0, a6) = (m[0] * x, m[6] * x);
+                if full {
+                    for q in 0..nr {
+                        s_buf[q] = (a0 + ns[q]) / (a6 + w[q]);
+                        v_buf[q] = tile[q][k - c0];
+                    }
+                    hand_out_runs(nr, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                    continue;
+                }
+                // The rows whose range holds column k, packed.
+                let mut n = 0;
+                for (dj, &(i0, i1)) in rows.iter().enumerate() {
+                    ns_c[n] = ns[dj];
+                    w_c[n] = w[dj];
+                    v_buf[n] = tile[dj][k - c0];
+                    n += (i0 <= k && k < i1) as usize;
+                }
+                for q in 0..n {
+                    s_buf[q] = (a0 + ns_c[q]) / (a6 + w_c[q]);
+                }
+                hand_out_runs(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+            }
+        }
+    }
+}
+
+/// Hands the first `n` samples of one line (positions `s`, values `v`) to
+/// `f` in runs of one bin (`b` is scratch for their bins).
+#[inline(always)]
+fn hand_out_runs<F: RunSink>(
+    n: usize,
+    s: &[f64; TILE],
+    b: &mut [u32; TILE],
+    v: &[f32; TILE],
+    inv_bin: f64,
+    last: f64,
+    f: &mut F,
+) {
+    for q in 0..n {
+        b[q] = Region::bin_index(s[q], inv_bin, last);
+    }
+    let mut q = 0;
+    while q < n {
+        let bq = b[q];
+        let mut e = q + 1;
+        while e < n && b[e] == bq {
+            e += 1;
+        }
+        f.run(bq as usize, &s[q..e], &v[q..e]);
+        q = e;
+    }
+}
+
+/// What takes the samples of [`Region::visit_band_runs`]: runs of samples
+/// of one bin.
+pub(super) trait RunSink {
+    /// Takes consecutive samples of bin `b`: their positions `s` (strip units) and linear values `v`.
+    fn run(&mut self, b: usize, s: &[f64], v: &[f32]);
 }
 
 /// What takes the samples [`Region::visit_band`] hands out: (bin, s, value).
