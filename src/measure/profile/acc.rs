@@ -77,28 +77,37 @@ impl BinAcc {
     /// into the sorted extremes).
     #[inline(always)]
     pub(super) fn add(&mut self, s: f64, v: f32) {
-        self.add_run::<false>(&[s], &[v]);
+        self.add_while::<false>(&[0], &[s], &[v], 0);
     }
 }
 
 impl BinAcc {
-    /// Adds consecutive samples (positions `s`, values `v`) in order, the
-    /// running values kept in registers over the run; the extremes' insertion
-    /// in AVX2 when `AVX2` (only instantiated inside a function compiled for,
-    /// and run on, a CPU with AVX2: `profile::first_pass`). The same values
-    /// either way: no NaN reaches here.
+    /// Adds samples `q ..` of a line (bins `b`, positions `s`, values `v`)
+    /// while they are in this bin (`b[q]`'s), in order; returns the index of
+    /// the first sample of another bin (or the line's length). The running
+    /// values stay in registers; the extremes' insertion is in AVX2 when
+    /// `AVX2` (only instantiated inside a function compiled for, and run on,
+    /// a CPU with AVX2: `profile::first_pass`). The same values either way:
+    /// no NaN reaches here.
     #[inline(always)]
-    pub(super) fn add_run<const AVX2: bool>(&mut self, s: &[f64], v: &[f32]) {
-        self.n += v.len() as u32;
+    pub(super) fn add_while<const AVX2: bool>(
+        &mut self,
+        b: &[u32],
+        s: &[f64],
+        v: &[f32],
+        q: usize,
+    ) -> usize {
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
             // SAFETY: `AVX2` is set only where the CPU has AVX2 (above).
-            unsafe { add_run_avx2(self, s, v) };
-            return;
+            return unsafe { add_while_avx2(self, b, s, v, q) };
         }
+        let (n, bq) = (b.len().min(s.len()).min(v.len()), b[q]);
         let (mut sum, mut sum2, mut ssum, mut ssum2) = (self.sum, self.sum2, self.ssum, self.ssum2);
         let (mut h, mut l) = (self.hi, self.lo);
-        for (&s, &v) in s.iter().zip(v) {
+        let mut e = q;
+        while e < n && b[e] == bq {
+            let (s, v) = (s[e], v[e]);
             let vd = v as f64;
             sum += vd;
             sum2 += vd * vd;
@@ -112,23 +121,26 @@ impl BinAcc {
                 h[k] = fmax(h[k], fmin(sh[k], v));
                 l[k] = fmin(l[k], fmax(sl[k], v));
             }
+            e += 1;
         }
         (self.sum, self.sum2, self.ssum, self.ssum2) = (sum, sum2, ssum, ssum2);
         (self.hi, self.lo) = (h, l);
+        self.n += (e - q) as u32;
+        e
     }
 }
 
-/// [`BinAcc::add_run`] with the extremes as eight-lane AVX2 vectors held in
-/// registers over the run. Each insertion is the median of a lane, the lane
-/// before it (±∞ before lane 0) and the value: `min(max(h, v), h shifted
-/// up)` for the largest, which equals the plain code's `max(h, min(h
+/// [`BinAcc::add_while`] with the extremes as eight-lane AVX2 vectors held
+/// in registers over the run. Each insertion is the median of a lane, the
+/// lane before it (±∞ before lane 0) and the value: `min(max(h, v), h
+/// shifted up)` for the largest, which equals the plain code's `max(h, min(h
 /// shifted up, v))` lane by lane on the sorted lanes, with one operation
 /// fewer on the chain from one sample to the next (`vminps`/`vmaxps` are
 /// [`fmin`]/[`fmax`] lane by lane; no NaN reaches here).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-fn add_run_avx2(a: &mut BinAcc, s: &[f64], v: &[f32]) {
+fn add_while_avx2(a: &mut BinAcc, b: &[u32], s: &[f64], v: &[f32], q: usize) -> usize {
     use std::arch::x86_64::*;
     const _: () = assert!(LANES == 8);
     let up = _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6);
@@ -143,8 +155,11 @@ fn add_run_avx2(a: &mut BinAcc, s: &[f64], v: &[f32]) {
         _mm256_set1_ps(f32::INFINITY),
         _mm256_set1_ps(f32::NEG_INFINITY),
     );
+    let (n, bq) = (b.len().min(s.len()).min(v.len()), b[q]);
     let (mut sum, mut sum2, mut ssum, mut ssum2) = (a.sum, a.sum2, a.ssum, a.ssum2);
-    for (&s, &v) in s.iter().zip(v) {
+    let mut e = q;
+    while e < n && b[e] == bq {
+        let (s, v) = (s[e], v[e]);
         let vd = v as f64;
         sum += vd;
         sum2 += vd * vd;
@@ -155,13 +170,16 @@ fn add_run_avx2(a: &mut BinAcc, s: &[f64], v: &[f32]) {
         let sl = _mm256_blend_ps::<1>(_mm256_permutevar8x32_ps(l, up), ninf);
         h = _mm256_min_ps(_mm256_max_ps(h, vv), sh);
         l = _mm256_max_ps(_mm256_min_ps(l, vv), sl);
+        e += 1;
     }
     (a.sum, a.sum2, a.ssum, a.ssum2) = (sum, sum2, ssum, ssum2);
+    a.n += (e - q) as u32;
     // SAFETY: as above.
     unsafe {
         a.hi = std::mem::transmute::<__m256, [f32; LANES]>(h);
         a.lo = std::mem::transmute::<__m256, [f32; LANES]>(l);
     }
+    e
 }
 
 /// Sets each bin's robust sums (the samples within 3σ of its mean, plus a

@@ -167,6 +167,10 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
         return Profile::default();
     }
     let nbins = ((strip.length / bin).ceil() as usize).max(1);
+    if nbins > u32::MAX as usize {
+        // Bins are numbered in 32 bits (and 2³² of them would not fit in memory).
+        return Profile::default();
+    }
     if let Some(lens) = &strip.lens {
         let mut prof = lens::bin_through_lens(
             planes,
@@ -301,7 +305,7 @@ fn first_pass_body<const AVX2: bool>(
         count: [0; 3],
     };
     for band in piece.bands() {
-        piece.visit_band_runs(&band, &mut pass);
+        piece.visit_band_lines(&band, &mut pass);
     }
     pass.count
 }
@@ -315,17 +319,32 @@ struct FirstPass<'a, const AVX2: bool> {
     count: [usize; 3],
 }
 
-impl<const AVX2: bool> region::RunSink for FirstPass<'_, AVX2> {
+impl<const AVX2: bool> region::LineSink for FirstPass<'_, AVX2> {
     #[inline(always)]
-    fn run(&mut self, b: usize, s: &[f64], v: &[f32]) {
-        if let Some(a) = b.checked_sub(self.b0).and_then(|k| self.acc.get_mut(k)) {
-            self.count[0] += v.len();
-            for &v in v {
-                self.count[1] += (v >= self.clip_level) as usize;
-                self.count[2] += (v <= 0.0) as usize;
-            }
-            a.add_run::<AVX2>(s, v);
+    fn line(&mut self, b: &[u32], s: &[f64], v: &[f32]) {
+        let clip = self.clip_level;
+        let mut count = [v.len(), 0, 0];
+        for &v in v {
+            count[1] += (v >= clip) as usize;
+            count[2] += (v <= 0.0) as usize;
         }
+        let mut q = 0;
+        while q < b.len() {
+            match (b[q] as usize)
+                .checked_sub(self.b0)
+                .and_then(|k| self.acc.get_mut(k))
+            {
+                Some(a) => q = a.add_while::<AVX2>(b, s, v, q),
+                None => {
+                    // Another run's bin: not counted here.
+                    count[0] -= 1;
+                    count[1] -= (v[q] >= clip) as usize;
+                    count[2] -= (v[q] <= 0.0) as usize;
+                    q += 1;
+                }
+            }
+        }
+        self.count.iter_mut().zip(count).for_each(|(c, k)| *c += k);
     }
 }
 

@@ -19,7 +19,7 @@ pub(super) struct Region<'a> {
     pub(super) bin: f64,
     pub(super) nbins: usize,
     /// Whether `s` changes faster across the columns than across the rows
-    /// (then [`Region::visit_band_runs`] walks down the columns).
+    /// (then [`Region::visit_band_lines`] walks down the columns).
     pub(super) by_columns: bool,
 }
 
@@ -210,20 +210,18 @@ impl Region<'_> {
     fn bin_index(s: f64, inv_bin: f64, last: f64) -> u32 {
         let t = (s * inv_bin).max(0.0).min(last);
         // SAFETY: t is finite and within [0, last], and last < 2³² (checked by
-        // the caller, `visit_band_runs`).
+        // the caller, `visit_band_lines`).
         unsafe { t.to_int_unchecked::<u32>() }
     }
 
-    /// Hands every sample of one band to `f` in runs of consecutive samples
-    /// of one bin: down each column of a tile when `self.by_columns` (a sweep
-    /// across the columns: a column's samples share a bin for many rows),
-    /// else along each row. Each bin gets its samples in increasing row
-    /// order within a column (or column order within a row).
+    /// Hands every sample of one band to `f` a line at a time: down each
+    /// column of a tile when `self.by_columns` (a sweep across the columns:
+    /// a column's samples share a bin for many rows), else along each row.
+    /// Each bin gets its samples in increasing row order within a column
+    /// (or column order within a row). The region has fewer than 2³² bins
+    /// ([`super::bin_planes`] checks).
     #[inline(always)]
-    pub(super) fn visit_band_runs<F: RunSink>(&self, band: &Band, f: &mut F) {
-        if self.nbins > u32::MAX as usize {
-            return self.visit_band(band, |b: usize, s: f64, v: f32| f.run(b, &[s], &[v]));
-        }
+    pub(super) fn visit_band_lines<F: LineSink>(&self, band: &Band, f: &mut F) {
         let m = &self.m;
         let inv_bin = 1.0 / self.bin;
         let last = (self.nbins - 1) as f64;
@@ -254,7 +252,7 @@ impl Region<'_> {
                         let x = ox + (i0 + k) as f64 * sx;
                         *s = (m[0] * x + ns0) / (m[6] * x + w0);
                     }
-                    hand_out_runs(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                    hand_out_line(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
                 }
             }
             return;
@@ -289,7 +287,7 @@ impl Region<'_> {
                         s_buf[q] = (a0 + ns[q]) / (a6 + w[q]);
                         v_buf[q] = tile[q][k - c0];
                     }
-                    hand_out_runs(nr, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                    hand_out_line(nr, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
                     continue;
                 }
                 // The rows whose range holds column k, packed.
@@ -303,16 +301,16 @@ impl Region<'_> {
                 for q in 0..n {
                     s_buf[q] = (a0 + ns_c[q]) / (a6 + w_c[q]);
                 }
-                hand_out_runs(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                hand_out_line(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
             }
         }
     }
 }
 
 /// Hands the first `n` samples of one line (positions `s`, values `v`) to
-/// `f` in runs of one bin (`b` is scratch for their bins).
+/// `f` with their bins (`b` is scratch for them).
 #[inline(always)]
-fn hand_out_runs<F: RunSink>(
+fn hand_out_line<F: LineSink>(
     n: usize,
     s: &[f64; TILE],
     b: &mut [u32; TILE],
@@ -324,23 +322,15 @@ fn hand_out_runs<F: RunSink>(
     for q in 0..n {
         b[q] = Region::bin_index(s[q], inv_bin, last);
     }
-    let mut q = 0;
-    while q < n {
-        let bq = b[q];
-        let mut e = q + 1;
-        while e < n && b[e] == bq {
-            e += 1;
-        }
-        f.run(bq as usize, &s[q..e], &v[q..e]);
-        q = e;
-    }
+    f.line(&b[..n], &s[..n], &v[..n]);
 }
 
-/// What takes the samples of [`Region::visit_band_runs`]: runs of samples
-/// of one bin.
-pub(super) trait RunSink {
-    /// Takes consecutive samples of bin `b`: their positions `s` (strip units) and linear values `v`.
-    fn run(&mut self, b: usize, s: &[f64], v: &[f32]);
+/// What takes the samples of [`Region::visit_band_lines`]: one line of
+/// samples at a time (down a column or along a row), in which consecutive
+/// samples mostly share a bin.
+pub(super) trait LineSink {
+    /// Takes a line's samples: their bins `b`, positions `s` (strip units) and linear values `v`.
+    fn line(&mut self, b: &[u32], s: &[f64], v: &[f32]);
 }
 
 /// What takes the samples [`Region::visit_band`] hands out: (bin, s, value).
