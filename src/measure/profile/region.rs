@@ -209,8 +209,8 @@ impl Region<'_> {
     #[inline(always)]
     fn bin_index(s: f64, inv_bin: f64, last: f64) -> u32 {
         let t = (s * inv_bin).max(0.0).min(last);
-        // SAFETY: t is finite and within [0, last], and last < 2³² (checked by
-        // the caller, `visit_band_lines`).
+        // SAFETY: t is finite and within [0, last], and last < 2³²
+        // (`bin_planes` refuses more bins).
         unsafe { t.to_int_unchecked::<u32>() }
     }
 
