@@ -802,10 +802,23 @@ mod tests {
     #[test]
     fn robust_bins_equal_the_plain_two_pass_definition() {
         // Perspective, a sparse (Bayer-like) lattice, noise with heavy tails and
-        // dust specks that put many outliers into single bins.
-        let (w, h) = (180, 140);
-        let quad = [[20.0, 30.0], [330.0, 12.0], [345.0, 250.0], [12.0, 200.0]];
+        // dust specks that put many outliers into single bins; the strip swept
+        // across the image (binned down the columns) and, transposed, down it
+        // (binned along the rows).
+        for down in [false, true] {
+            robust_bins_case(down);
+        }
+    }
+
+    fn robust_bins_case(down: bool) {
+        let (w, h) = (180, 180);
+        let mut quad = [[20.0, 30.0], [330.0, 12.0], [345.0, 250.0], [12.0, 200.0]];
+        if down {
+            quad.iter_mut().for_each(|p| p.swap(0, 1));
+        }
         let strip = strip_for(quad, 300.0, 60.0);
+        let inv = positive_inverse(&strip, strip.to_image.inverse().unwrap().m);
+        assert_eq!(sweeps_across_columns(&inv, &quad), !down);
         let mut rnd = uniform(12345u64);
         let mut data = vec![0f32; w * h];
         for j in 0..h {
