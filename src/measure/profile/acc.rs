@@ -79,9 +79,7 @@ impl BinAcc {
     pub(super) fn add(&mut self, s: f64, v: f32) {
         self.add_while::<false>(&[0], &[s], &[v], 0);
     }
-}
 
-impl BinAcc {
     /// Adds samples `q ..` of a line (bins `b`, positions `s`, values `v`)
     /// while they are in this bin (`b[q]`'s), in order; returns the index of
     /// the first sample of another bin (or the line's length). The running
@@ -99,7 +97,8 @@ impl BinAcc {
     ) -> usize {
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
-            // SAFETY: `AVX2` is set only where the CPU has AVX2 (above).
+            // SAFETY: `AVX2` is set only in code compiled for, and run on, a
+            // CPU with AVX2 (`profile::first_pass`).
             return unsafe { add_while_avx2(self, b, s, v, q) };
         }
         let (n, bq) = (b.len().min(s.len()).min(v.len()), b[q]);
