@@ -538,12 +538,33 @@ mod tests {
         };
         let mut reference = vec![BinAcc::default(); 1400];
         let mut ref_count = [0usize; 3];
-        region.visit(|b: usize, s: f64, v: f32| {
-            ref_count[0] += 1;
-            ref_count[1] += (v >= 0.999) as usize;
-            ref_count[2] += (v <= 0.0) as usize;
-            reference[b].add(s, v);
-        });
+        // Every sample centre of the image, row by row, through the region's
+        // own inside test (`Region::inside`'s arithmetic) and position
+        // (`visit_band_lines`' arithmetic).
+        let m = &region.m;
+        for j in 0..h {
+            let y = j as f64 + 0.5;
+            if y < region.ymin || y > region.ymax {
+                continue;
+            }
+            for i in 0..w {
+                let x = i as f64 + 0.5;
+                let rw = 1.0 / (m[6] * x + m[7] * y + m[8]);
+                let (si, ti) = (
+                    (m[0] * x + m[1] * y + m[2]) * rw,
+                    (m[3] * x + m[4] * y + m[5]) * rw,
+                );
+                if !(ti >= region.t0 && ti <= region.t1 && si >= region.s_lo && si <= region.s_hi) {
+                    continue;
+                }
+                let s = (m[0] * x + (m[1] * y + m[2])) / (m[6] * x + (m[7] * y + m[8]));
+                let v = lut[codes[j * w + i] as usize];
+                ref_count[0] += 1;
+                ref_count[1] += (v >= 0.999) as usize;
+                ref_count[2] += (v <= 0.0) as usize;
+                reference[((s * 4.0) as usize).min(1399)].add(s, v);
+            }
+        }
         assert!(ref_count[0] > 30_000, "{ref_count:?}");
         let run = |by_columns: bool, avx2: bool| {
             let piece = Region {

@@ -151,54 +151,29 @@ impl Region<'_> {
         out
     }
 
-    /// Calls f(bin, s, value) for every sample inside the region.
-    pub(super) fn visit<F: FnMut(usize, f64, f32)>(&self, mut f: F) {
+    /// Calls f(bin, s, value) for every sample inside the region, row by
+    /// row within each tile (the order the sums of a revisit have always
+    /// had, whatever `by_columns` says).
+    pub(super) fn visit<F: FnMut(usize, f64, f32)>(&self, f: F) {
+        let rows = Region {
+            by_columns: false,
+            ..*self
+        };
+        let mut each = EachSample(f);
         for band in self.bands() {
-            self.visit_band(&band, &mut f);
+            rows.visit_band_lines(&band, &mut each);
         }
     }
+}
 
-    /// Calls f(bin, s, value) for every sample of one band, in blocks of
-    /// TILE × TILE samples so that the bins a block touches stay in cache.
+/// A [`LineSink`] that hands each sample on to a closure: (bin, s, value).
+struct EachSample<F>(F);
+
+impl<F: FnMut(usize, f64, f32)> LineSink for EachSample<F> {
     #[inline(always)]
-    pub(super) fn visit_band<F: Sink>(&self, band: &Band, mut f: F) {
-        let m = &self.m;
-        let inv_bin = 1.0 / self.bin;
-        let last = self.nbins - 1;
-        let plane = self.planes[band.plane];
-        let (ox, oy, sx, sy) = plane.centres();
-        let rows = &band.rows;
-        let lo = rows.iter().filter(|r| r.0 < r.1).map(|r| r.0).min();
-        let hi = rows.iter().map(|r| r.1).max().unwrap_or(0);
-        let Some(lo) = lo else { return };
-        for c0 in (lo..hi).step_by(TILE) {
-            let c1 = (c0 + TILE).min(hi);
-            for (dj, &(i0, i1)) in rows.iter().enumerate() {
-                let (i0, i1) = (i0.max(c0), i1.min(c1));
-                if i0 >= i1 {
-                    continue;
-                }
-                let j = band.first + dj;
-                let y = oy + j as f64 * sy;
-                // The next tile's samples of this row, fetched while this one's are binned.
-                plane.prefetch(c1, j);
-                let mut v_buf = [0.0f32; TILE];
-                let row = plane.values(j, i0, &mut v_buf[..i1 - i0]);
-                // Along a row the homography's numerator and denominator are
-                // linear in x. The positions are computed first, a run of at
-                // most TILE at a time (a loop the compiler vectorises), then
-                // the samples are handed out.
-                let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
-                let mut s_buf = [0.0f64; TILE];
-                let s_run = &mut s_buf[..row.len()];
-                for (k, s) in s_run.iter_mut().enumerate() {
-                    let x = ox + (i0 + k) as f64 * sx;
-                    *s = (m[0] * x + ns0) / (m[6] * x + w0);
-                }
-                for (&s, &v) in s_run.iter().zip(row) {
-                    f.sample(((s * inv_bin) as usize).min(last), s, v);
-                }
-            }
+    fn line(&mut self, b: &[u32], s: &[f64], v: &[f32]) {
+        for ((&b, &s), &v) in b.iter().zip(s).zip(v) {
+            (self.0)(b as usize, s, v);
         }
     }
 }
@@ -333,20 +308,7 @@ pub(super) trait LineSink {
     fn line(&mut self, b: &[u32], s: &[f64], v: &[f32]);
 }
 
-/// What takes the samples [`Region::visit_band`] hands out: (bin, s, value).
-pub(super) trait Sink {
-    /// Takes one sample: its bin, its position `s` (strip units) and its linear value.
-    fn sample(&mut self, bin: usize, s: f64, v: f32);
-}
-
-impl<F: FnMut(usize, f64, f32)> Sink for F {
-    #[inline(always)]
-    fn sample(&mut self, bin: usize, s: f64, v: f32) {
-        self(bin, s, v)
-    }
-}
-
-/// Rows and columns of a tile in [`Region::visit_band`] (and of the lens
+/// Rows and columns of a tile in [`Region::visit_band_lines`] (and of the lens
 /// path's tiles).
 pub(super) const TILE: usize = 64;
 
