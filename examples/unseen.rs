@@ -347,7 +347,16 @@ fn main() {
         let mut u = Lcg(0xc0b0 + quality as u64);
         for k in 0..n {
             match everything(k, &mut u, quality) {
-                Ok(s) => all.scores.push(s),
+                Ok(s) => {
+                    if verbose {
+                        eprintln!(
+                            "everything q{quality} {k}: RMS {:.4} MTF50 {:+.2} %",
+                            s.0,
+                            100.0 * s.1
+                        );
+                    }
+                    all.scores.push(s)
+                }
                 Err(e) => all.errors.push(e),
             }
         }

@@ -380,15 +380,18 @@ fn coarse_jpeg_quality(dec: &Decoded) -> Option<f64> {
     (q < COARSE_JPEG_QUALITY).then_some(q)
 }
 
-/// The warning for a coarse JPEG. Simulated q75 shots: ripples of ±0.015 at
-/// 0.25–0.45 cy/px (smoothed out, [`super::strip`]), and MTF50 off the
-/// optics' by −1.1…+1.1 %, with no trend in exposure, light colour or the
-/// sweep's angle to the block grid (the README's "Coarse JPEGs"); q90 moves
+/// The warning for a coarse JPEG. Simulated q75 shots (coloured light,
+/// exposure 0.5–0.9, Gaussian lenses σ 0.45–0.7 px, turned 0.1–5°;
+/// `examples/coarse_jpeg_study.rs`): ripples of ±0.015 at 0.25–0.45 cy/px
+/// (smoothed out, [`super::strip`]) and MTF50 off the optics' by up to
+/// ±1.1 % either way, with no trend a correction could follow; square to the
+/// block grid (0°) by up to ±2.5 %, said separately per strip. q90 moves
 /// MTF50 by less than 0.05 %.
 fn coarse_jpeg_warning(q: f64) -> String {
     format!(
         "JPEG quality ≈ {q:.0} (luma table): its 8×8 block quantisation is part of this MTF \
          (simulated q75: MTF50 within ±1.1 % of the optics', either way; its ripple is smoothed \
-         over σ = 0.01 cy/px); shoot at quality ≥ 90 or raw for the lens's own MTF"
+         by a local quadratic over σ ≤ 0.06 cy/px); shoot at quality ≥ 90 or raw for the lens's \
+         own MTF"
     )
 }
