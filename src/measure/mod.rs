@@ -397,6 +397,8 @@ fn measure_planes_lens(
 ) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
+    // Strips of a coarse JPEG whose bars lie square to its blocks, with their drift (px).
+    let mut square: Vec<(String, f64)> = Vec::new();
     let lens = distortion.and_then(|d| d.lens(size.0, size.1));
     if let Some(d) = &distortion {
         notes.push(d.note());
@@ -474,13 +476,7 @@ fn measure_planes_lens(
             }
             let drift = strip::bar_drift_px(&c);
             if block_ripple && drift < strip::SQUARE_DRIFT_PX {
-                warnings.push(format!(
-                    "{name}/{}: the bars lie square to the JPEG's 8×8 blocks (they drift {drift:.2} px \
-                     across the strip), so its quantisation error is not averaged along them \
-                     (simulated q75: MTF50 off by up to ±2.5 %, against ±1.1 % turned 0.1–5°); \
-                     turn the chart by 1–5°",
-                    c.sweep_id
-                ));
+                square.push((format!("{name}/{}", c.sweep_id), drift));
             }
             if c.chart_modulation_source.starts_with("extrapolated") {
                 warnings.push(format!(
@@ -491,6 +487,16 @@ fn measure_planes_lens(
             curves.push(c);
         }
         patch_rows.extend(patched?);
+    }
+    if !square.is_empty() {
+        let names: Vec<&str> = square.iter().map(|s| s.0.as_str()).collect();
+        let drift = square.iter().map(|s| s.1).fold(0.0, f64::max);
+        warnings.push(format!(
+            "{}: the bars lie square to the JPEG's 8×8 blocks (they drift ≤ {drift:.2} px across \
+             the strip), so its quantisation error is not averaged along them (simulated q75: \
+             MTF50 off by up to ±2.5 %, against ±1.1 % turned 0.1–5°); turn the chart by 1–5°",
+            names.join(", ")
+        ));
     }
     if curves.is_empty() && patch_rows.is_empty() {
         return Err(Failure::Options(
