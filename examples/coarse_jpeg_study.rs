@@ -5,9 +5,12 @@
 //! strip corners with default settings (as `examples/unseen.rs` measures).
 //!
 //! Run: `cargo run --release --features examples --example coarse_jpeg_study
-//! [-- N [SEED [TURNS]]]`: N shots per turn (default 8, ≈ 30 s), seeds from
+//! [-- N [SEED [TURNS [QUALITY]]]]`: N shots per turn (default 8, ≈ 30 s), seeds from
 //! SEED (default 9000; the README's table pools 5000, 9000 and 13000),
-//! TURNS a comma-separated list of degrees (default 0,0.7,1.1,1.5,2.2,3,5).
+//! TURNS a comma-separated list of degrees (default 0,0.7,1.1,1.5,2.2,3,5),
+//! QUALITY the JPEG quality (default 75). Shots beyond a bar are listed on
+//! stderr; with `STUDY_SAVE=DIR` the last shot's files and strip corners
+//! are written to DIR (run one seed and one turn to keep a shot).
 //! Prints one row per turn: shots, MTF50 errors beyond 1 %, RMS and largest
 //! MTF50 error, mean MTF50 error, largest RMS |MTF − truth| over
 //! 0.01–0.45 cy/px; then the same for the shots stored losslessly (PNG).
@@ -35,6 +38,11 @@ fn true_mtf50(shot: &Shot) -> Option<f64> {
 /// `shot` stored as `format`, measured from its strip corners with defaults, scored.
 fn score(shot: &Shot, format: PhotoFormat) -> Result<Score, String> {
     let bytes = shot.encode(format).map_err(|e| e.to_string())?;
+    if let Ok(dir) = std::env::var("STUDY_SAVE") {
+        let r = shot.roi().unwrap_or_default();
+        let _ = std::fs::write(format!("{dir}/shot.{format:?}"), &bytes);
+        let _ = std::fs::write(format!("{dir}/roi.txt"), format!("{r:?}"));
+    }
     let dec = decode_bytes(&bytes, "shot").map_err(|e| e.to_string())?;
     let r = shot.roi().ok_or("no strip corners")?;
     let opts = MeasureOptions {
@@ -86,6 +94,7 @@ fn main() {
     let turns: Vec<f64> = arg(3)
         .map(|v| v.split(',').filter_map(|x| x.parse().ok()).collect())
         .unwrap_or_else(|| vec![0.0, 0.7, 1.1, 1.5, 2.2, 3.0, 5.0]);
+    let quality: u8 = arg(4).and_then(|a| a.parse().ok()).unwrap_or(75);
     let mut jpeg: Vec<Vec<Score>> = vec![Vec::new(); turns.len()];
     let mut png: Vec<Vec<Score>> = vec![Vec::new(); turns.len()];
     for k in 0..n {
@@ -101,7 +110,7 @@ fn main() {
                 seed,
                 exposure: 0.5 + 0.4 * draw(seed, 0x9e37_79b9_7f4a_7c15),
                 light_colour: Some([1.0, 0.82, 0.6]),
-                jpeg_quality: Some(75),
+                jpeg_quality: Some(quality),
                 ..Camera::default()
             };
             let sigma_px = 0.45 + 0.25 * draw(seed, 0xc2b2_ae3d_27d4_eb4f);
@@ -124,16 +133,23 @@ fn main() {
             };
             for (format, out) in [(PhotoFormat::Jpeg, &mut jpeg), (PhotoFormat::Png, &mut png)] {
                 match score(&shot, format) {
-                    Ok(s) => out[ti].push(s),
+                    Ok(s) => {
+                        if s.0.abs() > 0.01 || s.1 > 0.012 {
+                            eprintln!(
+                                "seed {seed}, turned {turn}°, {format:?}: MTF50 {:+.2} %, RMS {:.4}",
+                                100.0 * s.0,
+                                s.1
+                            );
+                        }
+                        out[ti].push(s)
+                    }
                     Err(e) => eprintln!("seed {seed}, turned {turn}°: {e}"),
                 }
             }
         }
     }
-    for (name, table) in [
-        ("RGB JPEG q75 4:2:0", &jpeg),
-        ("the same shots as PNG", &png),
-    ] {
+    let jpeg_name = format!("RGB JPEG q{quality} 4:2:0");
+    for (name, table) in [(jpeg_name.as_str(), &jpeg), ("the same shots as PNG", &png)] {
         println!("\n{name}\n");
         println!("| turn | shots | MTF50 beyond 1 % | MTF50 RMS | largest | mean | worst RMS |");
         println!("|---|---|---|---|---|---|---|");
