@@ -301,7 +301,7 @@ pub const SQUARE_DRIFT_PX: f64 = 0.1;
 /// less than [`SQUARE_DRIFT_PX`] give every block row the same samples, so
 /// the error stays as one draw per block column (simulated q75 at 0°: MTF50
 /// off by up to ±2.5 %, 10 of 24 shots beyond 1 %; turned 0.1–5°: within
-/// ±1.1 %, 1 of 208 beyond 1 %).
+/// ±1.1 %, 1 of 176 beyond 1 %).
 pub fn bar_drift_px(c: &Curve) -> f64 {
     c.measured_lines_px
         .iter()
@@ -389,10 +389,11 @@ mod tests {
         (-(f / 0.3).powi(2) * std::f64::consts::LN_2).exp()
     }
 
-    /// A closed-form Gaussian MTF with a ±0.015 ripple of period 0.02 cy/px
+    /// A parabola is reproduced exactly (the local fit is quadratic); a
+    /// closed-form Gaussian MTF with a ±0.015 ripple of period 0.02 cy/px
     /// above 0.2 cy/px: smoothed, within 0.004 of the Gaussian there; the
-    /// Gaussian alone moves by less than 5·10⁻⁴ anywhere (its curvature
-    /// times σ²/2), aliased points untouched.
+    /// Gaussian alone moves by less than 5·10⁻⁴ anywhere (its fourth
+    /// derivative's bias), aliased points untouched.
     #[test]
     fn the_block_ripple_is_smoothed_and_a_smooth_curve_kept() {
         // A sharpened curve's peak (a parabola, 1.2 at 0.2 cy/px) is kept exactly: the fit is quadratic.
