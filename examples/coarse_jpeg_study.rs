@@ -85,13 +85,15 @@ fn row(turn: f64, s: &[Score]) -> String {
     let fails = s.iter().filter(|x| x.0.abs() > 0.01).count();
     let cm = s.iter().map(|x| x.2.abs()).fold(0.0, f64::max);
     let cm_fails = s.iter().filter(|x| x.2.abs() > 0.005).count();
+    let cm_mean = s.iter().map(|x| x.2).sum::<f64>() / n;
     format!(
-        "| {turn}° | {} | {fails} | {:.2} % | {:.2} % | {:+.2} % | {worst:.4} | {:.2} % ({cm_fails}) |",
+        "| {turn}° | {} | {fails} | {:.2} % | {:.2} % | {:+.2} % | {worst:.4} | {:.2} % ({cm_fails}), mean {:+.2} % |",
         s.len(),
         100.0 * rms,
         100.0 * max,
         100.0 * mean,
-        100.0 * cm
+        100.0 * cm,
+        100.0 * cm_mean
     )
 }
 
@@ -161,7 +163,7 @@ fn main() {
     for (name, table) in [(jpeg_name.as_str(), &jpeg), ("the same shots as PNG", &png)] {
         println!("\n{name}\n");
         println!(
-            "| turn | shots | MTF50 beyond 1 % | MTF50 RMS | largest | mean | worst RMS | chart modulation: largest error (beyond 0.5 %) |"
+            "| turn | shots | MTF50 beyond 1 % | MTF50 RMS | largest | mean | worst RMS | chart modulation: largest error (beyond 0.5 %), mean |"
         );
         println!("|---|---|---|---|---|---|---|---|");
         for (turn, s) in turns.iter().zip(table.iter()) {
