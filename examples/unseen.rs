@@ -49,6 +49,19 @@ impl Kind {
         }
     }
 
+    /// Keeps one shot's result; with a `label`, lists its score on stderr.
+    fn record(&mut self, result: Result<Score, String>, label: Option<String>) {
+        match result {
+            Ok(s) => {
+                if let Some(l) = label {
+                    eprintln!("{l}: RMS {:.4} MTF50 {:+.2} %", s.0, 100.0 * s.1);
+                }
+                self.scores.push(s)
+            }
+            Err(e) => self.errors.push(e),
+        }
+    }
+
     fn fails(&self, s: &Score) -> bool {
         !(s.0 <= self.bar && s.1.abs() <= 0.01 && s.2.abs() <= 0.005)
     }
@@ -296,10 +309,10 @@ fn main() {
             let Some(kind) = kinds.iter_mut().find(|k| k.name == shot.name) else {
                 continue;
             };
-            match score(&shot.encode(1000 + v), shot.quad, &|f| shot.truth(f)) {
-                Ok(s) => kind.scores.push(s),
-                Err(e) => kind.errors.push(e),
-            }
+            kind.record(
+                score(&shot.encode(1000 + v), shot.quad, &|f| shot.truth(f)),
+                None,
+            );
         }
     }
     let mut dist = Kind::new("camera: radial distortion −4…+4 %, near an edge", 0.006);
@@ -322,19 +335,10 @@ fn main() {
     let mut jpeg = Kind::new("camera: RGB JPEG q75 4:2:0, turned 0–5°", 0.012);
     for k in 0..n {
         let turn = turns[k as usize % turns.len()];
-        match jpeg_q75(turn, 700 + k) {
-            Ok(s) => {
-                if verbose {
-                    eprintln!(
-                        "q75 turned {turn}°: RMS {:.4} MTF50 {:+.2} %",
-                        s.0,
-                        100.0 * s.1
-                    );
-                }
-                jpeg.scores.push(s)
-            }
-            Err(e) => jpeg.errors.push(e),
-        }
+        jpeg.record(
+            jpeg_q75(turn, 700 + k),
+            verbose.then(|| format!("q75 turned {turn}°")),
+        );
     }
     kinds.push(jpeg);
     for quality in [85, 75] {
@@ -346,19 +350,8 @@ fn main() {
         );
         let mut u = Lcg(0xc0b0 + quality as u64);
         for k in 0..n {
-            match everything(k, &mut u, quality) {
-                Ok(s) => {
-                    if verbose {
-                        eprintln!(
-                            "everything q{quality} {k}: RMS {:.4} MTF50 {:+.2} %",
-                            s.0,
-                            100.0 * s.1
-                        );
-                    }
-                    all.scores.push(s)
-                }
-                Err(e) => all.errors.push(e),
-            }
+            let label = verbose.then(|| format!("everything q{quality} {k}"));
+            all.record(everything(k, &mut u, quality), label);
         }
         kinds.push(all);
     }

@@ -474,9 +474,11 @@ fn measure_planes_lens(
                     100.0 * c.clipped_fraction
                 ));
             }
-            let drift = strip::bar_drift_px(&c);
-            if block_ripple && drift < strip::SQUARE_DRIFT_PX {
-                square.push((format!("{name}/{}", c.sweep_id), drift));
+            if block_ripple {
+                let drift = strip::bar_drift_px(&c);
+                if drift < strip::SQUARE_DRIFT_PX {
+                    square.push((format!("{name}/{}", c.sweep_id), drift));
+                }
             }
             if c.chart_modulation_source.starts_with("extrapolated") {
                 warnings.push(format!(
