@@ -15,8 +15,7 @@ mod distortion;
 
 use std::time::Instant;
 use sweepmtf::measure::synth::{SynthShot, nuisance_cases, standard_cases};
-use sweepmtf::measure::{MeasureOptions, Method, measure_decoded};
-use sweepmtf::photo::decode::decode_bytes;
+use sweepmtf::measure::{MeasureOptions, Method, measure_bytes};
 
 /// Accuracy figures of one run.
 struct Score {
@@ -28,8 +27,7 @@ struct Score {
 
 fn score(shot: &SynthShot, bytes: &[u8], opts: &MeasureOptions) -> Result<Score, String> {
     let t0 = Instant::now();
-    let dec = decode_bytes(bytes, &shot.name).map_err(|e| e.to_string())?;
-    let m = measure_decoded(&dec, &shot.name, None, opts).map_err(|e| e.to_string())?;
+    let m = measure_bytes(bytes, &shot.name, None, opts).map_err(|e| e.to_string())?;
     let ms = t0.elapsed().as_secs_f64() * 1e3;
     let c = &m.curves[0];
     let d = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
@@ -192,11 +190,7 @@ fn main() {
                 ..MeasureOptions::default()
             };
             let t0 = Instant::now();
-            let res = decode_bytes(&bytes, &shot.name)
-                .map_err(|e| e.to_string())
-                .and_then(|d| {
-                    measure_decoded(&d, &shot.name, None, &opts).map_err(|e| e.to_string())
-                });
+            let res = measure_bytes(&bytes, &shot.name, None, &opts).map_err(|e| e.to_string());
             let ms = t0.elapsed().as_secs_f64() * 1e3;
             match res {
                 Ok(m) => {

@@ -2,7 +2,10 @@
 //! the camera simulator's coloured-light RGB JPEG q75 4:2:0 with exposures
 //! 0.5–0.9 of clipping and Gaussian lenses of σ = 0.45–0.7 px (drawn per
 //! shot), at several turns to the 8×8 block grid, each measured from its
-//! strip corners with default settings (as `examples/unseen.rs` measures).
+//! strip corners with default settings, from the file's bytes as `sweepmtf
+//! measure` reads them (a JPEG's luminance from its Y′ plane alone; with
+//! `STUDY_RGB=1` from the whole RGB decode instead, which under coloured
+//! light carries the chroma quantiser too).
 //!
 //! Run: `cargo run --release --features examples --example coarse_jpeg_study
 //! [-- N [SEED [TURNS [QUALITY]]]]`: N shots per turn (default 8, ≈ 30 s), seeds from
@@ -16,7 +19,7 @@
 //! 0.01–0.45 cy/px, largest chart-modulation error (and how many beyond
 //! 0.5 %); then the same for the shots stored losslessly (PNG).
 
-use sweepmtf::measure::{MeasureOptions, measure_decoded};
+use sweepmtf::measure::{MeasureOptions, measure_bytes, measure_decoded};
 use sweepmtf::model::System;
 use sweepmtf::photo::decode::decode_bytes;
 use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for};
@@ -44,14 +47,21 @@ fn score(shot: &Shot, format: PhotoFormat) -> Result<Score, String> {
         let _ = std::fs::write(format!("{dir}/shot.{format:?}"), &bytes);
         let _ = std::fs::write(format!("{dir}/roi.txt"), format!("{r:?}"));
     }
-    let dec = decode_bytes(&bytes, "shot").map_err(|e| e.to_string())?;
     let r = shot.roi().ok_or("no strip corners")?;
     let opts = MeasureOptions {
         roi: Some([[r[0], r[1]], [r[2], r[3]], [r[4], r[5]], [r[6], r[7]]]),
         refine_roi: true,
         ..MeasureOptions::default()
     };
-    let m = measure_decoded(&dec, "shot", None, &opts).map_err(|e| e.to_string())?;
+    // As `sweepmtf measure` reads the file (a luminance measurement of a
+    // JPEG decodes Y′ alone), or with STUDY_RGB from the whole RGB decode.
+    let m = if std::env::var_os("STUDY_RGB").is_some() {
+        let dec = decode_bytes(&bytes, "shot").map_err(|e| e.to_string())?;
+        measure_decoded(&dec, "shot", None, &opts)
+    } else {
+        measure_bytes(&bytes, "shot", None, &opts)
+    }
+    .map_err(|e| e.to_string())?;
     let c = &m.curves[0];
     let rows = &shot.truth().ok_or("no truth")?.rows;
     let (mut se, mut n) = (0.0, 0);

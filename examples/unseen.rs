@@ -1,7 +1,9 @@
 //! Issue 15's bars on shots no test and no tuning ever saw: many fresh
 //! geometries and noise seeds of each nuisance, measured as a new user would
 //! (strip corners only, no target, default settings), scored against the
-//! renderers' exact truth.
+//! renderers' exact truth. Each shot is measured from its bytes as
+//! `sweepmtf measure` measures a file (`measure_bytes`: a JPEG luminance
+//! measurement decodes the Y′ plane alone).
 //!
 //! Run: `cargo run --release --features examples --example unseen [-- N [-v]]`
 //! (N shots of each kind, default 20: ≈ 1.5 min; `-v` lists the JPEG shots).
@@ -21,9 +23,8 @@
 
 use sweepmtf::distortion::{Lens, Ptlens};
 use sweepmtf::measure::synth::nuisance_cases;
-use sweepmtf::measure::{MeasureOptions, measure_decoded};
+use sweepmtf::measure::{MeasureOptions, measure_bytes};
 use sweepmtf::model::System;
-use sweepmtf::photo::decode::decode_bytes;
 use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for, strip_card};
 use sweepmtf::simulate::{Camera, LightGradient, PhotoFormat, Sharpen, Shot, mtf_at, render};
 use sweepmtf::target::{SweepLaw, Target};
@@ -107,13 +108,12 @@ fn true_mtf50(truth: &dyn Fn(f64) -> f64) -> f64 {
 
 /// Measures `bytes` with strip corners `roi` and default settings; scores against `truth`.
 fn score(bytes: &[u8], roi: [[f64; 2]; 4], truth: &dyn Fn(f64) -> f64) -> Result<Score, String> {
-    let dec = decode_bytes(bytes, "shot").map_err(|e| e.to_string())?;
     let opts = MeasureOptions {
         roi: Some(roi),
         refine_roi: true,
         ..MeasureOptions::default()
     };
-    let m = measure_decoded(&dec, "shot", None, &opts).map_err(|e| e.to_string())?;
+    let m = measure_bytes(bytes, "shot", None, &opts).map_err(|e| e.to_string())?;
     let c = &m.curves[0];
     let (mut se, mut n) = (0.0, 0);
     for p in c.points.iter().filter(|p| !p.aliased) {
