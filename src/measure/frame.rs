@@ -391,7 +391,7 @@ fn coarse_jpeg_warning(q: f64) -> String {
     format!(
         "JPEG quality ≈ {q:.0} (luma table): its 8×8 block quantisation is part of this MTF \
          (simulated q75: MTF50 within ±1.1 % of the optics', either way; its ripple is smoothed \
-         by a local quadratic over σ ≤ 0.06 cy/px); shoot at quality ≥ 90 or raw for the lens's \
+         by a twiced local quadratic over σ ≤ 0.06 cy/px); shoot at quality ≥ 90 or raw for the lens's \
          own MTF"
     )
 }
