@@ -6,7 +6,7 @@
 //! measurement decodes the Y′ plane alone).
 //!
 //! Run: `cargo run --release --features examples --example unseen [-- N [-v]]`
-//! (N shots of each kind, default 20: ≈ 1.5 min; `-v` lists the JPEG shots).
+//! (N shots of each kind, default 20: ≈ 2.5 min; `-v` lists the JPEG shots).
 //! Prints one row per kind: shots, failures of the bars, worst RMS
 //! |MTF − truth| over 0.01–0.45 cy/px, the range of the MTF50 error and of
 //! the chart modulation's error (printed 0.800).

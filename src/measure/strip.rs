@@ -369,8 +369,8 @@ fn smooth_block_ripple(points: &mut [MtfPoint]) {
 }
 
 /// The local quadratic of [`smooth_block_ripple`] through `src` (f cy/px,
-/// value, σ; sorted by f, spanning `first`–`last`) read at `f`: the value
-/// and the kernel-weighted mean σ; `None` where the kernel is empty.
+/// value, σ; sorted by f, spanning `first`–`last`) read at `f0` (cy/px):
+/// the value and the kernel-weighted mean σ; `None` where the kernel is empty.
 fn local_quadratic(src: &[(f64, f64, f64)], f0: f64, first: f64, last: f64) -> Option<(f64, f64)> {
     // Narrower towards the ends, so the window stays whole (a one-sided window is biased by the slope).
     let edge = (f0 - first).min(last - f0) / 3.0;
@@ -480,7 +480,8 @@ mod tests {
     /// ≈ 0.25 cy/px) bends enough for a single local quadratic to raise it
     /// by 1.0·10⁻³ near 0.3 cy/px (its fourth derivative); twiced, it moves
     /// by less than 2.5·10⁻⁴ wherever the kernel is whole (up to 0.32 cy/px
-    /// here, the points ending at 0.5), and never by more than before.
+    /// here, the points ending at 0.5); nearer the end, not twiced, within
+    /// the single pass's 1.1·10⁻³.
     #[test]
     fn twicing_takes_out_the_local_quadratics_bias() {
         let soft = |f: f64| {
