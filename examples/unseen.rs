@@ -21,16 +21,16 @@
 //! unsharp-mask sharpening, coloured light, RGB JPEG q85 or q75 4:2:0,
 //! turned ±1.5°, near a random long edge).
 
+#[path = "common/scoring.rs"]
+mod scoring;
+
+use scoring::{Score, score};
 use sweepmtf::distortion::{Lens, Ptlens};
 use sweepmtf::measure::synth::nuisance_cases;
-use sweepmtf::measure::{MeasureOptions, measure_bytes};
 use sweepmtf::model::System;
 use sweepmtf::simulate::demo::{GaussianPsf, demo_target_for, strip_card};
 use sweepmtf::simulate::{Camera, LightGradient, PhotoFormat, Sharpen, Shot, mtf_at, render};
 use sweepmtf::target::{SweepLaw, Target};
-
-/// (RMS, MTF50 relative error, chart modulation relative error) of one shot.
-type Score = (f64, f64, f64);
 
 /// Results of one kind, with its RMS bar.
 struct Kind {
@@ -86,48 +86,6 @@ impl Kind {
             range(|s| s.2)
         )
     }
-}
-
-/// The first fall of `truth` through 0.5 (cy/px), by bisection on a 0.001 cy/px walk.
-fn true_mtf50(truth: &dyn Fn(f64) -> f64) -> f64 {
-    let mut lo = 0.0;
-    while truth(lo + 0.001) >= 0.5 {
-        lo += 0.001;
-    }
-    let mut hi = lo + 0.001;
-    for _ in 0..50 {
-        let mid = 0.5 * (lo + hi);
-        if truth(mid) >= 0.5 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
-}
-
-/// Measures `bytes` with strip corners `roi` and default settings; scores against `truth`.
-fn score(bytes: &[u8], roi: [[f64; 2]; 4], truth: &dyn Fn(f64) -> f64) -> Result<Score, String> {
-    let opts = MeasureOptions {
-        roi: Some(roi),
-        refine_roi: true,
-        ..MeasureOptions::default()
-    };
-    let m = measure_bytes(bytes, "shot", None, &opts).map_err(|e| e.to_string())?;
-    let c = &m.curves[0];
-    let (mut se, mut n) = (0.0, 0);
-    for p in c.points.iter().filter(|p| !p.aliased) {
-        if (0.01..=0.45).contains(&p.freq_cy_px) {
-            se += (p.mtf - truth(p.freq_cy_px)).powi(2);
-            n += 1;
-        }
-    }
-    let f50 = c.figures.mtf50_cy_px.ok_or("no MTF50")?;
-    Ok((
-        (se / n.max(1) as f64).sqrt(),
-        f50 / true_mtf50(truth) - 1.0,
-        c.chart_modulation / 0.8 - 1.0,
-    ))
 }
 
 /// A deterministic uniform generator on [0, 1).
@@ -259,7 +217,7 @@ fn strip_card_score(cam: &Camera, sigma_px: f64, format: PhotoFormat) -> Result<
 fn score_shot(shot: &Shot, format: PhotoFormat) -> Result<Score, String> {
     let bytes = shot.encode(format).map_err(|e| e.to_string())?;
     let rows = &shot.truth().ok_or("no truth")?.rows;
-    score(&bytes, roi_of(shot), &|f| mtf_at(rows, f))
+    score(&bytes, roi_of(shot), &|f| mtf_at(rows, f), false)
 }
 
 /// Renders target `t` with camera `cam` through a Gaussian lens of `sigma_px`.
@@ -310,7 +268,7 @@ fn main() {
                 continue;
             };
             kind.record(
-                score(&shot.encode(1000 + v), shot.quad, &|f| shot.truth(f)),
+                score(&shot.encode(1000 + v), shot.quad, &|f| shot.truth(f), false),
                 None,
             );
         }

@@ -155,7 +155,7 @@ fn coloured_light_rgb_jpeg_q75_420_within_0_012() {
     // The same shot losslessly: the measurement itself holds every bar.
     check("colour PNG", &shot, PhotoFormat::Png, 0.002);
     // As JPEG q75 the file's own MTF moves: block quantisation ripples the
-    // curve (smoothed by a local quadratic over σ ≤ 0.06 cy/px, as the
+    // curve (smoothed by a twiced local quadratic over σ ≤ 0.06 cy/px, as the
     // summary's warning says), and what is left moves MTF50 by up to ±1 %
     // turned 0.1–5° (`examples/coarse_jpeg_study.rs`, `examples/unseen.rs`).
     // Square to the grid (0°) the error is not averaged along the bars
