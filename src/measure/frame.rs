@@ -174,7 +174,7 @@ pub(super) fn measure_frame_at(
     // strips') long edges in one green lattice (the edge search samples
     // bilinearly in the lattice's own steps), read only about those edges.
     let (w, h) = (frame.width, frame.height);
-    let distortion = resolve_distortion(opts, &roi, target, (w, h), |q| {
+    let distortion = resolve_distortion(opts, &roi, target, (w, h), false, |q| {
         let pad = super::lens_fit::search_pad_px(q, w, h);
         let c = bbox_crop(q, w, h, pad);
         let band = |y: usize| super::lens_fit::edge_band_span(q, pad + 2.0, y);
@@ -189,6 +189,7 @@ pub(super) fn measure_frame_at(
         Box::new(green.unwrap_or_else(|| crate::photo::Plane::full(0, 0, Vec::new())))
     })
     .map_err(err)?;
+    let roi = distortion.and_then(|d| d.snapped).map_or(roi, |s| s.0);
     let lens = distortion.and_then(|d| d.lens(frame.width, frame.height));
     // Only what binning reads is converted to f32.
     let (crop, span) = read_set(
@@ -323,13 +324,14 @@ fn measure_coded(
     // converted where read, so no plane is kept for them (on a 24 MP strip
     // the bands were 17.5 MB of the peak memory).
     let at = crate::photo::linearise::pixel_converter(dec, tone, Channel::Luma);
-    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), |_| {
+    let distortion = resolve_distortion(opts, &roi, target, (dec.width, dec.height), true, |_| {
         Box::new(super::lens_fit::Converted {
             at: &at,
             width: dec.width,
             rows: dec.rows,
         })
     })?;
+    let roi = distortion.and_then(|d| d.snapped).map_or(roi, |s| s.0);
     let lens = distortion.and_then(|d| d.lens(dec.width, dec.height));
     // Integer codes are binned in place through the tone's table (no
     // converted copy: on a 24 MP strip that was 35 MB); float codes are

@@ -166,6 +166,9 @@ fn crossings(d: &[f64], h: &[f64]) -> Vec<(f64, bool)> {
     out
 }
 
+/// How many leading zero crossings the law's first guess may skip (an end's step into the surround).
+const LEADING_CROSSINGS: usize = 4;
+
 /// (s, phase in cycles, weight) samples of a phase law.
 pub type PhasePoints = Vec<(f64, f64, f64)>;
 
@@ -207,24 +210,37 @@ fn crossing_points(
         let hp = local_half_period(&cross, n);
         trend = moving_mean(&v, |i| hp[i]);
     }
-    // Accept crossings while the half-periods shrink smoothly.
-    let mut pts = Vec::new();
-    let first_phase = if cross[0].1 { -0.25 } else { 0.25 };
-    for (k, &(pos, _)) in cross.iter().enumerate() {
-        let s = s0 + pos * ds;
-        if k >= 2 {
-            let p1 = cross[k].0 - cross[k - 1].0;
-            let p0 = cross[k - 1].0 - cross[k - 2].0;
-            if !(p1 > 0.45 * p0 && p1 < 1.8 * p0) {
-                break;
+    // Accept crossings while the half-periods shrink smoothly, from the
+    // first crossing or, where the strip's end holds a step (an end given a
+    // few px beyond the printed strip, into its surround: two crossings a
+    // pixel or two apart), from one of the next few: the longest such run.
+    let run = |k0: usize| {
+        let mut pts = Vec::new();
+        let first_phase = if cross[k0].1 { -0.25 } else { 0.25 };
+        for k in k0..cross.len() {
+            let s = s0 + cross[k].0 * ds;
+            if k >= k0 + 2 {
+                let p1 = cross[k].0 - cross[k - 1].0;
+                let p0 = cross[k - 1].0 - cross[k - 2].0;
+                if !(p1 > 0.45 * p0 && p1 < 1.8 * p0) {
+                    break;
+                }
+                // Frequency in cycles/pixel from the half-period.
+                let f_px = s_per_px(s) / (2.0 * p1 * ds);
+                if f_px > max_cy_px {
+                    break;
+                }
             }
-            // Frequency in cycles/pixel from the half-period.
-            let f_px = s_per_px(s) / (2.0 * p1 * ds);
-            if f_px > max_cy_px {
-                break;
-            }
+            pts.push((s, first_phase + 0.5 * (k - k0) as f64, 1.0));
         }
-        pts.push((s, first_phase + 0.5 * k as f64, 1.0));
+        pts
+    };
+    let mut pts = run(0);
+    for k0 in 1..cross.len().min(LEADING_CROSSINGS + 1) {
+        let other = run(k0);
+        if other.len() > pts.len() {
+            pts = other;
+        }
     }
     if pts.len() < 8 {
         return None;
@@ -327,6 +343,46 @@ mod tests {
         assert_eq!(fit.kind, LawKind::Linear);
         for s in [100.0, 1000.0, 2000.0] {
             assert!((fit.freq(s) / law.freq(s) - 1.0).abs() < 0.01, "{s}");
+        }
+    }
+
+    /// A log sweep whose first 2 px are the strip's white surround (an end
+    /// given just beyond the printed strip): the step's two crossings, a
+    /// pixel or two apart, used to end the run of regular half-periods
+    /// before it began ("fewer than 5 regular cycles").
+    #[test]
+    fn a_step_into_the_surround_at_the_start_is_skipped() {
+        let (f0, k) = (0.008, (0.6f64 / 0.008).ln() / 1400.0);
+        let n = 1400 * 4;
+        let y: Vec<f64> = (0..n)
+            .map(|i| {
+                let x = (i as f64 + 0.5) * 0.25 - 2.0;
+                if x < 0.0 {
+                    1.0
+                } else {
+                    let phase = f0 / k * ((k * x).exp() - 1.0);
+                    0.5 + 0.4 * (2.0 * std::f64::consts::PI * phase).sin()
+                }
+            })
+            .collect();
+        let prof = Profile {
+            s: (0..n).map(|i| (i as f64 + 0.5) * 0.25).collect(),
+            y,
+            count: vec![1.0; n],
+            var_s: vec![0.0; n],
+            bin: 0.25,
+            length: 1400.0,
+            ..Profile::default()
+        };
+        let (fit, pts) = initial_law(&prof, Some(LawKind::Log), |_| 1.0, 0.3).unwrap();
+        assert!(pts.len() > 100, "{} crossings", pts.len());
+        for s in [200.0, 600.0, 1000.0] {
+            let want = f0 * (k * (s - 2.0)).exp();
+            assert!(
+                (fit.freq(s) / want - 1.0).abs() < 0.02,
+                "{s}: {} against {want}",
+                fit.freq(s)
+            );
         }
     }
 }

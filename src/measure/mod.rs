@@ -346,12 +346,15 @@ fn given_distortion(
 /// The distortion of a shot: as given, or estimated from the long edges of
 /// the strip (or, with a target, of the first sweep strip whose edges give a
 /// clear answer) in the luminance `luma(quad)` gives (it must reach
-/// [`lens_fit::search_pad_px`] beyond `quad`), or none when estimating is off.
+/// [`lens_fit::search_pad_px`] beyond `quad`; `whole`: it shows the whole
+/// strip, not only the bands about its long edges), or none when estimating
+/// is off.
 fn resolve_distortion<'a>(
     opts: &MeasureOptions,
     roi: &[Point; 4],
     target: Option<&Target>,
     size: (usize, usize),
+    whole: bool,
     luma: impl Fn(&[Point; 4]) -> Box<dyn lens_fit::Sampler + 'a>,
 ) -> Result<Option<DistortionFound>, Failure> {
     if opts.distortion.is_some() {
@@ -361,7 +364,30 @@ fn resolve_distortion<'a>(
         return Ok(None);
     }
     let Some(t) = target else {
-        return Ok(Some(lens_fit::estimate(&*luma(roi), roi, size.0, size.1)));
+        let plane = luma(roi);
+        let mut d = lens_fit::estimate(&*plane, roi, size.0, size.1);
+        // The refinement fitted straight lines to the long edges and turned
+        // the ends along bars the lens bends; where a lens model is used, the
+        // corners as given go onto the edges seen through it instead.
+        let given = opts.roi.unwrap_or(*roi);
+        if opts.refine_roi
+            && let Some(q) = lens_fit::snap_to_edges(
+                &d,
+                whole.then_some(&*plane),
+                &given,
+                size.0,
+                size.1,
+                2.0 * REFINE_SEARCH_PX + d.bow_px,
+            )
+        {
+            let moved = given
+                .iter()
+                .zip(&q)
+                .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                .fold(0.0, f64::max);
+            d.snapped = Some((q, moved));
+        }
+        return Ok(Some(d));
     };
     // Before, a target's strips were binned as if straight: a 3.6 % pincushion
     // put MTF50 29 % low on one strip and 5 % high on another. The strips are

@@ -1,0 +1,349 @@
+#!/usr/bin/env python3
+"""Shots of a printed sine-sweep strip made by a renderer that shares no code
+with sweepmtf, measured by the `sweepmtf` CLI as a new user would (strip
+corners only, default settings) and scored against this renderer's exact
+truth. A check from outside the code under test (issue 15's "shots the tests
+never see").
+
+The camera, all in numpy:
+- the chart: a log sweep 0.1 < reflectance < 0.9 (mean 0.5, contrast 0.8) on
+  white paper (1.0), evaluated analytically at 4×4 points per pixel;
+- the geometry: a keystone homography (one strip end up to 1.5× the other's
+  height), a turn, and radial distortion r_d = r_u (1 + k1 r_u² + k2 r_u⁴)
+  (radius 1 = half the frame diagonal), inverted per sample by Newton;
+- the light: a linear gradient across the frame and cos⁴-like vignetting,
+  tinted (1, 0.8, 0.55), white-balanced by the camera afterwards;
+- the lens: a diffraction-limited circular pupil at f/N (λ = 0.55 µm,
+  pitch 4 µm) × a Gaussian aberration blur × optionally a defocus disc, its
+  exact OTF applied by FFT on the 4×-supersampled radiance;
+- the pixel: the 4×4 sample mean (transfer sin(πf)/(4 sin(πf/4)) per axis);
+- the sensor: Poisson shot noise (full well 9000 e⁻) and 3 e⁻ read noise;
+- optional unsharp-mask sharpening in linear light (discrete Gaussian
+  kernel, its exact discrete transfer in the truth);
+- sRGB encoding to 8 bits, then Pillow's libjpeg at quality Q with 4:2:0
+  chroma (or PNG).
+
+Truth at a frequency f along the strip (angle θ in the image):
+OTF_lens(f) · B(f cos θ) · B(f sin θ) · (1 + a (1 − G_d(f cos θ, f sin θ))).
+
+Run: python3 docs/studies/independent_shots.py N SEED [KIND] (needs numpy,
+scipy, pillow and a release build: `cargo build --release`). KIND: jpeg75,
+jpeg85, png, sharpen, keystone, distort, light, all. Prints one line per shot
+and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
+the chart modulation's error (printed 0.800).
+"""
+
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+from PIL import Image
+from scipy.special import j1
+
+S = 4  # samples per pixel along each axis
+W, H = 1600, 900  # frame (px)
+PITCH_MM = 0.004
+LAMBDA_MM = 0.55e-3
+BIN = os.environ.get("SWEEPMTF", os.path.join(os.path.dirname(__file__), "../../target/release/sweepmtf"))
+
+
+def otf_lens(f, p):
+    """The lens's OTF at radial frequency f (cy/px)."""
+    fc = 1.0 / (LAMBDA_MM * p["fnum"]) * PITCH_MM  # diffraction cut-off, cy/px
+    nu = np.clip(np.abs(f) / fc, 0, 1)
+    diff = (2 / np.pi) * (np.arccos(nu) - nu * np.sqrt(1 - nu * nu))
+    g = np.exp(-2 * np.pi**2 * p["sigma"] ** 2 * f * f)
+    x = 2 * np.pi * p["defocus"] * np.abs(f)
+    disc = np.where(x > 1e-9, 2 * j1(np.maximum(x, 1e-9)) / np.maximum(x, 1e-9), 1.0)
+    return diff * g * disc
+
+
+def box(f):
+    """The 4×4 sample mean's transfer along one axis at f cy/px."""
+    f = np.asarray(f, dtype=float)
+    num = np.sin(np.pi * f)
+    den = S * np.sin(np.pi * f / S)
+    return np.where(np.abs(den) > 1e-12, num / np.where(np.abs(den) > 1e-12, den, 1), 1.0)
+
+
+def usm_kernel(radius):
+    r = int(math.ceil(4 * radius))
+    x = np.arange(-r, r + 1)
+    k1 = np.exp(-0.5 * (x / radius) ** 2)
+    k1 /= k1.sum()
+    return x, k1
+
+
+def usm_transfer(fx, fy, p):
+    if p["amount"] == 0:
+        return 1.0
+    x, k = usm_kernel(p["radius"])
+    gx = np.sum(k * np.cos(2 * np.pi * fx * x))
+    gy = np.sum(k * np.cos(2 * np.pi * fy * x))
+    return 1 + p["amount"] * (1 - gx * gy)
+
+
+def truth(f, p):
+    th = p["theta"]
+    fx, fy = f * math.cos(th), f * math.sin(th)
+    return float(otf_lens(np.array(f), p) * box(fx) * box(fy) * usm_transfer(fx, fy, p))
+
+
+def homography(src, dst):
+    a = []
+    for (x, y), (u, v) in zip(src, dst):
+        a.append([x, y, 1, 0, 0, 0, -u * x, -u * y, -u])
+        a.append([0, 0, 0, x, y, 1, -v * x, -v * y, -v])
+    _, _, vt = np.linalg.svd(np.array(a))
+    return vt[-1].reshape(3, 3) / vt[-1, -1]
+
+
+def apply_h(h, x, y):
+    d = h[2, 0] * x + h[2, 1] * y + h[2, 2]
+    return (h[0, 0] * x + h[0, 1] * y + h[0, 2]) / d, (h[1, 0] * x + h[1, 1] * y + h[1, 2]) / d
+
+
+def distort(x, y, p):
+    """Undistorted → distorted image position (px)."""
+    cx, cy, rn = W / 2, H / 2, math.hypot(W, H) / 2
+    u, v = (x - cx) / rn, (y - cy) / rn
+    r2 = u * u + v * v
+    s = 1 + p["k1"] * r2 + p["k2"] * r2 * r2
+    return cx + u * s * rn, cy + v * s * rn
+
+
+def undistort(x, y, p):
+    cx, cy, rn = W / 2, H / 2, math.hypot(W, H) / 2
+    ud, vd = (x - cx) / rn, (y - cy) / rn
+    rd = np.sqrt(ud * ud + vd * vd)
+    r = rd.copy()
+    for _ in range(8):
+        fval = r * (1 + p["k1"] * r * r + p["k2"] * r**4) - rd
+        dval = 1 + 3 * p["k1"] * r * r + 5 * p["k2"] * r**4
+        r = r - fval / dval
+    scale = np.where(rd > 1e-12, r / np.maximum(rd, 1e-12), 1.0)
+    return cx + ud * scale * rn, cy + vd * scale * rn
+
+
+def reflectance(u, v, p):
+    """The printed chart at (u, v) mm: the sweep strip on white paper."""
+    L, h, f0, f1 = p["L"], p["h"], p["f0"], p["f1"]
+    inside = (u >= 0) & (u <= L) & (v >= 0) & (v <= h)
+    k = math.log(f1 / f0) / L
+    ph = 2 * np.pi * f0 / k * (np.exp(k * np.clip(u, 0, L)) - 1)
+    sweep = 0.5 * (1 + 0.8 * np.sin(ph))
+    return np.where(inside, sweep, 1.0)
+
+
+def render(p, rng):
+    """The 8-bit sRGB frame (H×W×3) and the strip's corners in the image."""
+    # The chart strip (mm) onto the undistorted image: a keystone quadrilateral.
+    L, h = p["L"], p["h"]
+    cx, cy = p["cx"], p["cy"]
+    half_len = p["len_px"] / 2
+    h0 = p["h_px"]
+    h1 = h0 * p["keystone"]
+    c, s = math.cos(p["theta"]), math.sin(p["theta"])
+    local = [(-half_len, -h0 / 2), (half_len, -h1 / 2), (half_len, h1 / 2), (-half_len, h0 / 2)]
+    dst = [(cx + c * a - s * b, cy + s * a + c * b) for a, b in local]
+    src = [(0, 0), (L, 0), (L, h), (0, h)]
+    hm = homography(src, dst)
+    hinv = np.linalg.inv(hm)
+    # Supersampled sample positions (image px), only over the strip's surround band.
+    # Pixel (i, j) covers [i, i + 1) × [j, j + 1) (sweepmtf's convention: origin at the top-left corner).
+    xs = (np.arange(W * S) + 0.5) / S
+    ys = (np.arange(H * S) + 0.5) / S
+    img = np.ones((H * S, W * S), dtype=np.float64)
+    # Rows of the band that can hold the strip (with a margin for the blur).
+    ally = [distort(x, y, p)[1] for x, y in dst]
+    y0 = max(0, int((min(ally) - 40) * S))
+    y1 = min(H * S, int((max(ally) + 40) * S))
+    X, Y = np.meshgrid(xs, ys[y0:y1])
+    ux, uy = undistort(X, Y, p)
+    cu, cv = apply_h(hinv, ux, uy)
+    img[y0:y1] = reflectance(cu, cv, p)
+    del X, Y, ux, uy, cu, cv
+    # Lens blur by FFT on the band (padded), with the exact OTF.
+    band = img[max(0, y0 - 64 * S) : min(H * S, y1 + 64 * S)]
+    pad = 64 * S
+    b = np.pad(band, ((pad, pad), (pad, pad)), mode="edge")
+    fy = np.fft.fftfreq(b.shape[0]) * S  # cy/px
+    fx = np.fft.rfftfreq(b.shape[1]) * S
+    fr = np.sqrt(fy[:, None] ** 2 + fx[None, :] ** 2)
+    b = np.fft.irfft2(np.fft.rfft2(b) * otf_lens(fr, p), s=b.shape)[pad:-pad, pad:-pad]
+    img[max(0, y0 - 64 * S) : min(H * S, y1 + 64 * S)] = b
+    # The pixel aperture: the mean of its S×S samples.
+    refl = img.reshape(H, S, W, S).mean(axis=(1, 3))
+    # Light: gradient × vignetting × tint; exposure so white paper peaks at p["exposure"].
+    yy, xx = np.mgrid[0:H, 0:W]
+    rn = math.hypot(W, H) / 2
+    r2 = ((xx - W / 2) ** 2 + (yy - H / 2) ** 2) / rn**2
+    vig = 1 - p["vignette"] * r2
+    grad = 1 + p["gradient"] * ((xx - W / 2) * math.cos(p["grad_dir"]) + (yy - H / 2) * math.sin(p["grad_dir"])) / rn
+    light = vig * grad
+    light = light / light.max() * p["exposure"]
+    tint = np.array([1.0, 0.8, 0.55])
+    lin = refl[..., None] * light[..., None] * tint[None, None, :]
+    # Sensor: Poisson shot noise and read noise in electrons, full well 9000.
+    fw = 9000.0
+    e = rng.poisson(np.clip(lin, 0, None) * fw).astype(np.float64) + rng.normal(0, 3.0, lin.shape)
+    lin = e / fw
+    # White balance (the camera neutralises the tint).
+    lin = lin / tint[None, None, :]
+    # Unsharp mask in linear light (separable discrete Gaussian).
+    if p["amount"] > 0:
+        x, k = usm_kernel(p["radius"])
+        from scipy.ndimage import convolve1d
+
+        blur = convolve1d(convolve1d(lin, k, axis=0, mode="nearest"), k, axis=1, mode="nearest")
+        lin = lin + p["amount"] * (lin - blur)
+    lin = np.clip(lin, 0, 1)
+    srgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
+    out = np.clip(np.round(srgb * 255), 0, 255).astype(np.uint8)
+    corners = [distort(x, y, p) for x, y in dst]
+    return out, corners
+
+
+def draw(kind, rng):
+    u = rng.uniform
+    p = dict(
+        L=240.0,
+        h=20.0,
+        theta=math.radians(u(-3, 3)),
+        cx=W / 2 + u(-80, 80),
+        cy=H / 2 + u(-60, 60),
+        len_px=u(1100, 1400),
+        h_px=u(70, 110),
+        keystone=1.0,
+        k1=0.0,
+        k2=0.0,
+        vignette=u(0.0, 0.2),
+        gradient=u(0.0, 0.1),
+        grad_dir=u(0, 2 * math.pi),
+        exposure=u(0.6, 0.9),
+        fnum=u(2.8, 8.0),
+        sigma=u(0.3, 0.6),
+        defocus=0.0 if u() < 0.5 else u(0.2, 0.7),
+        amount=0.0,
+        radius=1.0,
+        fmt="jpeg",
+        quality=85,
+        click=0.0,
+    )
+    # Chart frequencies chosen so the strip reaches ≈ 0.008 … 0.6 cy/px.
+    px_per_mm = p["len_px"] / p["L"]
+    p["f0"] = 0.008 * px_per_mm
+    p["f1"] = 0.6 * px_per_mm
+    if kind in ("jpeg75", "all"):
+        p["quality"] = 75
+    if kind == "png":
+        p["fmt"] = "png"
+    if kind in ("sharpen", "all"):
+        p["amount"] = u(0.3, 0.8)
+        p["radius"] = u(0.8, 1.5)
+    if kind in ("keystone", "all"):
+        p["keystone"] = u(1.2, 1.5) if u() < 0.5 else 1 / u(1.2, 1.5)
+    if kind in ("distort", "all"):
+        # −4…+4 % at the frame corner, strip near the top or bottom edge.
+        d = u(-0.04, 0.04)
+        mix = u(0, 1)
+        p["k1"], p["k2"] = d * mix, d * (1 - mix)
+        p["cy"] = H / 2 + (1 if u() < 0.5 else -1) * u(250, 320)
+    if kind in ("light", "all"):
+        p["vignette"] = 0.5
+        p["gradient"] = u(0.3, 0.5)
+        p["grad_dir"] = math.atan2(math.sin(p["theta"]), math.cos(p["theta"])) + (0 if u() < 0.5 else math.pi)
+    # Overrides for probing one shot: P_<name>=value (e.g. P_fmt=png, P_k1=0).
+    for k, v in os.environ.items():
+        if k.startswith("P_") and k[2:] in p:
+            p[k[2:]] = v if k[2:] == "fmt" else int(v) if k[2:] == "quality" else float(v)
+    return p
+
+
+def true_mtf50(p):
+    lo = 0.0
+    while truth(lo + 0.001, p) >= 0.5:
+        lo += 0.001
+    hi = lo + 0.001
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        if truth(mid, p) >= 0.5:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def measure(img, corners, p, tmp):
+    """Writes the shot, measures it with the CLI from its strip corners, scores it."""
+    path = os.path.join(tmp, "shot.jpg" if p["fmt"] == "jpeg" else "shot.png")
+    im = Image.fromarray(img, "RGB")
+    if p["fmt"] == "jpeg":
+        im.save(path, quality=p["quality"], subsampling=2)
+    else:
+        im.save(path)
+    # Corners as a user clicks them: exact, or off by up to ±click px in x and y.
+    jitter = np.random.default_rng(len(corners) + int(1e6 * p["theta"]) % 1000).uniform(-1, 1, 8) * p["click"]
+    roi = ",".join(f"{v + j:.2f}" for v, j in zip([v for c in corners for v in c], jitter))
+    out = os.path.join(tmp, "out")
+    r = subprocess.run([BIN, "measure", path, "--roi", roi, "--json", "-q", "-o", out], capture_output=True, text=True)
+    if r.returncode != 0:
+        return None, r.stderr.strip()
+    j = json.loads(r.stdout)
+    c = j["curves"][0]
+    se, n = 0.0, 0
+    with open(os.path.join(out, "shot.mtf.csv")) as fh:
+        head = fh.readline().strip().split(",")
+        for line in fh:
+            q = dict(zip(head, line.strip().split(",")))
+            f = float(q["freq_cy_px"])
+            if q["aliased"] == "false" and 0.01 <= f <= 0.45:
+                se += (float(q["mtf"]) - truth(f, p)) ** 2
+                n += 1
+    rms = math.sqrt(se / max(n, 1))
+    f50 = (c.get("mtf50") or {}).get("cy_px")
+    e50 = f50 / true_mtf50(p) - 1 if f50 else float("nan")
+    return (rms, e50, c["chart_modulation"] / 0.8 - 1), None
+
+
+def main():
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 5
+    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 1
+    kind = sys.argv[3] if len(sys.argv) > 3 else "jpeg85"
+    res = []
+    with tempfile.TemporaryDirectory() as tmp:
+        only = os.environ.get("ONLY")
+        for i in range(n):
+            if only is not None and i != int(only):
+                continue
+            rng = np.random.default_rng(seed * 1000 + i)
+            p = draw(kind, rng)
+            img, corners = render(p, rng)
+            keep = os.environ.get("KEEP")
+            s, err = measure(img, corners, p, keep or tmp)
+            if keep:
+                with open(f"{keep}/truth.csv", "w") as fh:
+                    fh.write("freq_cy_px,truth\n")
+                    for f in np.arange(0.002, 0.7, 0.002):
+                        fh.write(f"{f:.4f},{truth(f, p):.6f}\n")
+            tag = f"{kind} seed {seed} #{i}: θ {math.degrees(p['theta']):+.2f}° f/{p['fnum']:.1f} σ {p['sigma']:.2f} defocus {p['defocus']:.2f}"
+            if s is None:
+                print(f"{tag}: FAILED {err}", flush=True)
+                continue
+            print(f"{tag}: RMS {s[0]:.4f} MTF50 {100 * s[1]:+.2f} % chart mod. {100 * s[2]:+.2f} %", flush=True)
+            res.append(s)
+    if res:
+        a = np.array(res)
+        print(
+            f"| {kind} | {len(res)} of {n} | worst RMS {a[:, 0].max():.4f} | MTF50 {100 * a[:, 1].min():+.2f}…{100 * a[:, 1].max():+.2f} % "
+            f"(beyond 1 %: {int(np.sum(np.abs(a[:, 1]) > 0.01))}) | chart mod. {100 * a[:, 2].min():+.2f}…{100 * a[:, 2].max():+.2f} % "
+            f"(beyond 0.5 %: {int(np.sum(np.abs(a[:, 2]) > 0.005))}) |"
+        )
+
+
+if __name__ == "__main__":
+    main()
