@@ -338,9 +338,12 @@ def main():
             res.append(s)
     if res:
         a = np.array(res)
+        e50 = a[:, 1][np.isfinite(a[:, 1])]  # shots whose MTF stays above 0.5 have none
+        r50 = f"{100 * e50.min():+.2f}…{100 * e50.max():+.2f} %" if len(e50) else "none"
         print(
-            f"| {kind} | {len(res)} of {n} | worst RMS {a[:, 0].max():.4f} | MTF50 {100 * a[:, 1].min():+.2f}…{100 * a[:, 1].max():+.2f} % "
-            f"(beyond 1 %: {int(np.sum(np.abs(a[:, 1]) > 0.01))}) | chart mod. {100 * a[:, 2].min():+.2f}…{100 * a[:, 2].max():+.2f} % "
+            f"| {kind} | {len(res)} of {n} | worst RMS {a[:, 0].max():.4f} | MTF50 {r50} "
+            f"(beyond 1 %: {int(np.sum(np.abs(e50) > 0.01))}, none found: {len(a) - len(e50)}) | "
+            f"chart mod. {100 * a[:, 2].min():+.2f}…{100 * a[:, 2].max():+.2f} % "
             f"(beyond 0.5 %: {int(np.sum(np.abs(a[:, 2]) > 0.005))}) |"
         )
 
