@@ -407,7 +407,7 @@ pub fn refine_roi<S: AtImage + ?Sized>(
     let max_slant = 2.0 * search_px + 4.0;
     if target.is_none() {
         // The ends kept the user's (slanted) lines: turn them along the printed bars.
-        let fit = super::strip_ends::align_ends(full, &h, max_slant)
+        let fit = super::strip_ends::align_ends_settled(full, &h, max_slant)
             .map_err(|m| LocateError::Refine(format!("strip ends: {m}")))?;
         out = fit.corners;
     }

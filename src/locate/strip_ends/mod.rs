@@ -267,6 +267,39 @@ pub fn align_ends<S: AtImage + ?Sized>(
     })
 }
 
+/// Further searches of a strip's ends along its bars after the first, at most.
+const ENDS_ROUNDS: usize = 4;
+/// End slants (px) below which the ends count as settled.
+const ENDS_SETTLED_PX: f64 = 0.1;
+
+/// [`align_ends`], searched again from the turned frame while the ends still
+/// turn by more than [`ENDS_SETTLED_PX`] (at most [`ENDS_ROUNDS`] more
+/// times): one search takes out only about half of a slant that both ends
+/// share (a keystoned strip clicked ±3 px off kept 0.4–0.5 px at each
+/// corner after one, ≈ 0.1 after four); exact corners need no second one.
+/// The result's `slant_px` is the last search's.
+pub fn align_ends_settled<S: AtImage + ?Sized>(
+    g: &S,
+    h: &Homography,
+    max_slant_px: f64,
+) -> Result<EndsFit, String> {
+    let mut fit = align_ends(g, h, max_slant_px)?;
+    let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    for _ in 0..ENDS_ROUNDS {
+        if fit.slant_px.iter().all(|v| v.abs() <= ENDS_SETTLED_PX) {
+            break;
+        }
+        let Ok(turned) = Homography::from_quads(&square, &fit.corners) else {
+            break;
+        };
+        match align_ends(g, &turned, max_slant_px) {
+            Ok(next) => fit = next,
+            Err(_) => break,
+        }
+    }
+    Ok(fit)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -340,6 +373,27 @@ mod tests {
         }
         assert!((0.5 * (q[0][0] + q[3][0]) - 0.025).abs() < 0.002, "{q:?}");
         assert!((0.5 * (q[1][0] + q[2][0]) - 0.98).abs() < 0.002, "{q:?}");
+    }
+
+    /// Both ends slanted the same way (the frame sheared): the settled
+    /// search leaves < 0.2 px. (On this noiseless render one search already
+    /// does; the half left by one search was seen on the independent
+    /// renderer's keystoned, blurred JPEG shots, docs/studies/independent_shots.py.)
+    #[test]
+    fn a_slant_both_ends_share_is_taken_out() {
+        let (plane, truth) = render(0.8);
+        let g = Gray::of_plane(&plane);
+        let given = on_edges(&truth, [[0.02, 0.03], [0.975, 0.985]]);
+        let once = align_ends(&g, &given, 20.0).unwrap();
+        let settled = align_ends_settled(&g, &given, 20.0).unwrap();
+        let inv = truth.inverse().unwrap();
+        let err = |c: [Point; 4]| {
+            let q = c.map(|p| inv.apply(p));
+            [(q[3][0] - q[0][0]) * 600.0, (q[2][0] - q[1][0]) * 600.0]
+        };
+        let (e1, e2) = (err(once.corners), err(settled.corners));
+        eprintln!("end slants left (px): one search {e1:?}, settled {e2:?}");
+        assert!(e2.iter().all(|v| v.abs() < 0.2), "{e2:?}");
     }
 
     #[test]

@@ -283,10 +283,6 @@ fn tls_line(pts: &[Point]) -> [Point; 2] {
     [[mx, my], [th.cos(), th.sin()]]
 }
 
-/// Smallest slant (px, across the strip's width) of the printed bars against
-/// an end line given by the user for [`snap_to_edges`] to turn that end.
-pub const END_TURN_MIN_PX: f64 = 0.5;
-
 /// The photo seen through the lens undistorted: the value at undistorted
 /// position p is the photo's at `lens.distort(p)`.
 struct Undistorted<'a> {
@@ -303,10 +299,10 @@ impl crate::locate::sample::AtImage for Undistorted<'_> {
 
 /// The strip corners `roi` (as the user gave them) with their long edges
 /// put on the edges seen (`d.edge_lines`, straight once undistorted by `d`'s
-/// model) and each end kept on its line through the undistorted end corners,
-/// or turned along the printed bars as they run once undistorted where they
-/// clearly slant against it (by more than [`END_TURN_MIN_PX`], as `plane`
-/// shows them; without a plane that shows the whole strip, kept): what the corners' refinement, which fits straight lines and
+/// model) and each end turned about its centre along the printed bars as
+/// they run once undistorted (as `plane` shows them; without a plane that
+/// shows the whole strip, or where the bars are not clearly seen, kept on
+/// its line through the undistorted end corners): what the corners' refinement, which fits straight lines and
 /// bar directions to a photo the lens bends, cannot do. `None` when the
 /// model is not used, no lines were fitted, or a corner would move more than
 /// `max_move` px.
@@ -347,20 +343,10 @@ pub fn snap_to_edges(
             lens: &lens,
         };
         let max_slant = 2.0 * super::REFINE_SEARCH_PX + 4.0;
-        if let Ok(fit) = crate::locate::strip_ends::align_ends(&view, &h, max_slant) {
-            // An end turns only where its bars clearly run off it: the
-            // slant found at the far (high-frequency) end is extrapolated
-            // from where the bars are seen, and through a model that only
-            // approximates the lens it is off by a few tenths of a pixel
-            // (simulated r⁵ distortion: 0.25 px, MTF RMS 0.010 against
-            // 0.004 with the corners as given).
-            for (end, idx) in [(0, [0, 3]), (1, [1, 2])] {
-                if fit.slant_px[end].abs() > END_TURN_MIN_PX {
-                    for i in idx {
-                        snapped[i] = fit.corners[i];
-                    }
-                }
-            }
+        // (Until the ends' search was settled, one search left half of a
+        // slant both ends shared, and these ends turned only beyond 0.5 px.)
+        if let Ok(fit) = crate::locate::strip_ends::align_ends_settled(&view, &h, max_slant) {
+            snapped = fit.corners;
         }
     }
     let snapped = snapped.map(|p| lens.distort(p));
