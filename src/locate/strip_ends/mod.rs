@@ -268,9 +268,9 @@ pub fn align_ends<S: AtImage + ?Sized>(
 }
 
 /// Further searches of a strip's ends along its bars after the first, at most.
-const ENDS_ROUNDS: usize = 4;
+pub const ENDS_ROUNDS: usize = 4;
 /// End slants (px) below which the ends count as settled.
-const ENDS_SETTLED_PX: f64 = 0.1;
+pub const ENDS_SETTLED_PX: f64 = 0.1;
 
 /// [`align_ends`], searched again from the turned frame while the ends still
 /// turn by more than [`ENDS_SETTLED_PX`] (at most [`ENDS_ROUNDS`] more
