@@ -370,22 +370,15 @@ fn resolve_distortion<'a>(
         // the ends along bars the lens bends; where a lens model is used, the
         // corners as given go onto the edges seen through it instead.
         let given = opts.roi.unwrap_or(*roi);
-        if opts.refine_roi
-            && let Some(q) = lens_fit::snap_to_edges(
+        if opts.refine_roi {
+            d.snapped = lens_fit::snap_to_edges(
                 &d,
                 whole.then_some(&*plane),
                 &given,
                 size.0,
                 size.1,
                 2.0 * REFINE_SEARCH_PX + d.bow_px,
-            )
-        {
-            let moved = given
-                .iter()
-                .zip(&q)
-                .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-                .fold(0.0, f64::max);
-            d.snapped = Some((q, moved));
+            );
         }
         return Ok(Some(d));
     };

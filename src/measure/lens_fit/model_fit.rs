@@ -13,22 +13,6 @@ struct Chosen {
     cost: f64,
 }
 
-/// vᵀ·M⁻¹·v for M⁻¹ given as rows `kinv`: χ² of v against covariance M⁻¹ (times σ²): vᵀ K v where K = (kinv)⁻¹.
-fn quad_form_inv(kinv: &[&[f64]], v: &[f64]) -> f64 {
-    match v.len() {
-        2 => {
-            let k: [[f64; 2]; 2] = [[kinv[0][0], kinv[0][1]], [kinv[1][0], kinv[1][1]]];
-            crate::linalg::solve(k, [v[0], v[1]], 1e-300).map_or(0.0, |x| x[0] * v[0] + x[1] * v[1])
-        }
-        3 => {
-            let k: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| kinv[i][j]));
-            crate::linalg::solve(k, [v[0], v[1], v[2]], 1e-300)
-                .map_or(0.0, |x| x[0] * v[0] + x[1] * v[1] + x[2] * v[2])
-        }
-        _ => 0.0,
-    }
-}
-
 /// The total-least-squares line through `pts`: its centroid and unit direction.
 pub(super) fn tls_line(pts: &[Point]) -> [Point; 2] {
     let n = pts.len().max(1) as f64;
@@ -118,10 +102,13 @@ fn inverse<const N: usize>(k: [[f64; N]; N]) -> Option<[[f64; N]; N]> {
     Some(inv)
 }
 
+/// A fit of N coefficients: the model, K, K⁻¹ and the least cost ([`fit_terms`]).
+type TermsFit<const N: usize> = (Ptlens, [[f64; N]; N], [[f64; N]; N], f64);
+
 /// Least squares of the coefficients `free` (0 = a, 1 = b, 2 = c; the others
 /// as in `start`) by Newton steps on the quadratic through the cost at a
-/// central-difference stencil, shrinking: the model, K⁻¹ (K half the cost's
-/// Hessian, the normal matrix; σ²·K⁻¹ is the covariance) and the least cost;
+/// central-difference stencil, shrinking: the model, K (half the cost's
+/// Hessian, the normal matrix), K⁻¹ (σ²·K⁻¹ is the covariance) and the least cost;
 /// `None` where the cost is not convex or the model leaves what a lens can have.
 fn fit_terms<const N: usize>(
     edges: &[Vec<Point>; 2],
@@ -129,10 +116,10 @@ fn fit_terms<const N: usize>(
     free: [usize; N],
     w: usize,
     ht: usize,
-) -> Option<(Ptlens, [[f64; N]; N], f64)> {
+) -> Option<TermsFit<N>> {
     let k0 = [start.a, start.b, start.c];
     let mut p: [f64; N] = std::array::from_fn(|i| k0[free[i]]);
-    let mut kinv = None;
+    let mut normal = None;
     let mut h = 0.002;
     for _ in 0..3 {
         let c = |d: &[(usize, f64)]| {
@@ -163,7 +150,7 @@ fn fit_terms<const N: usize>(
         for (i, row) in inv.iter().enumerate() {
             p[i] -= 0.5 * row.iter().zip(g).map(|(a, b)| a * b).sum::<f64>();
         }
-        kinv = Some(inv);
+        normal = Some((k, inv));
         h = (h * 0.25).max(1e-5);
     }
     let m = with_terms(start, free, p);
@@ -171,13 +158,52 @@ fn fit_terms<const N: usize>(
     (p.iter().all(|v| v.is_finite())
         && lens.check().is_ok()
         && lens.corner_percent().abs() <= MAX_CORNER_PERCENT)
-        .then(|| (m, kinv.unwrap_or([[0.0; N]; N]), cost(edges, m, w, ht)))
+        .then(|| {
+            let (k, kinv) = normal.unwrap_or(([[0.0; N]; N], [[0.0; N]; N]));
+            (m, k, kinv, cost(edges, m, w, ht))
+        })
 }
 
 /// RMS of the points of both edges about their own lines once undistorted by `m`.
 fn rms_about_lines(edges: &[Vec<Point>; 2], m: Ptlens, width: usize, height: usize) -> f64 {
     let n: usize = edges.iter().map(|e| e.len()).sum();
     (cost(edges, m, width, height) / n.max(1) as f64).sqrt()
+}
+
+/// The richer model `fit` (from [`fit_terms`] over the coefficients
+/// `free`, `n` edge points) where it beats `chosen`: its Δχ² over it passes
+/// MIN_SIGNIFICANCE² and it lowers the edges' RMS MIN_RICHER_GAIN×.
+fn richer<const N: usize>(
+    chosen: &Chosen,
+    (m, k, kinv, c): TermsFit<N>,
+    free: [usize; N],
+    n: usize,
+) -> Option<Chosen> {
+    let s2 = c / (n as f64 - 4.0 - N as f64).max(1.0);
+    let gain = (
+        (chosen.cost / c.max(1e-300)).sqrt(),
+        (chosen.cost - c) / s2.max(1e-300),
+    );
+    if !(gain.0 >= MIN_RICHER_GAIN && gain.1 > MIN_SIGNIFICANCE * MIN_SIGNIFICANCE) {
+        return None;
+    }
+    let mut sigma = [None; 3];
+    for (r, &i) in free.iter().enumerate() {
+        sigma[i] = Some((s2 * kinv[r][r]).max(0.0).sqrt());
+    }
+    // Distance from no model: χ² of the coefficients against their covariance σ²·K⁻¹.
+    let all = [m.a, m.b, m.c];
+    let v: [f64; N] = std::array::from_fn(|i| all[free[i]]);
+    let chi2 = (0..N)
+        .map(|i| (0..N).map(|j| v[i] * k[i][j] * v[j]).sum::<f64>())
+        .sum::<f64>()
+        / s2.max(1e-300);
+    Some(Chosen {
+        model: m,
+        sigma,
+        significance: chi2.max(0.0).sqrt(),
+        cost: c,
+    })
 }
 
 /// Fits the model to the edge points of both long edges (see the module's
@@ -249,36 +275,12 @@ pub(super) fn fit_edges(
         significance: (b / b_sigma).abs(),
         cost: c_min.max(0.0),
     };
-    let richer = |chosen: &Chosen, m: Ptlens, kinv: &[&[f64]], free: &[usize], c: f64| {
-        let s2 = c / (n as f64 - 4.0 - free.len() as f64).max(1.0);
-        let gain = (
-            (chosen.cost / c.max(1e-300)).sqrt(),
-            (chosen.cost - c) / s2.max(1e-300),
-        );
-        if !(gain.0 >= MIN_RICHER_GAIN && gain.1 > MIN_SIGNIFICANCE * MIN_SIGNIFICANCE) {
-            return None;
-        }
-        let mut sigma = [None; 3];
-        for (r, &i) in free.iter().enumerate() {
-            sigma[i] = Some((s2 * kinv[r][r]).max(0.0).sqrt());
-        }
-        // Distance from no model: χ² of the coefficients against their covariance.
-        let k = [m.a, m.b, m.c];
-        let v: Vec<f64> = free.iter().map(|&i| k[i]).collect();
-        let chi2 = quad_form_inv(kinv, &v) / s2.max(1e-300);
-        Some(Chosen {
-            model: m,
-            sigma,
-            significance: chi2.max(0.0).sqrt(),
-            cost: c,
-        })
-    };
-    if let Some((m, kinv, c)) = fit_terms(&edges, cubic(b), [0, 1], width, height)
-        && let Some(next) = richer(&chosen, m, &[&kinv[0], &kinv[1]], &[0, 1], c)
+    if let Some(fit) = fit_terms(&edges, cubic(b), [0, 1], width, height)
+        && let Some(next) = richer(&chosen, fit, [0, 1], n)
     {
         chosen = next;
-        if let Some((m, kinv, c)) = fit_terms(&edges, chosen.model, [0, 1, 2], width, height)
-            && let Some(next) = richer(&chosen, m, &[&kinv[0], &kinv[1], &kinv[2]], &[0, 1, 2], c)
+        if let Some(fit) = fit_terms(&edges, chosen.model, [0, 1, 2], width, height)
+            && let Some(next) = richer(&chosen, fit, [0, 1, 2], n)
         {
             chosen = next;
         }

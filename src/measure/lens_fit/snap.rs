@@ -23,8 +23,8 @@ impl crate::locate::sample::AtImage for Undistorted<'_> {
 /// they run once undistorted (as `plane` shows them; without a plane that
 /// shows the whole strip, or where the bars are not clearly seen, kept on
 /// its line through the undistorted end corners): what the corners' refinement, which fits straight lines and
-/// bar directions to a photo the lens bends, cannot do. `None` when the
-/// model is not used, no lines were fitted, or a corner would move more than
+/// bar directions to a photo the lens bends, cannot do. With the largest
+/// move of a corner (px); `None` when the model is not used, no lines were fitted, or a corner would move more than
 /// `max_move` px.
 pub fn snap_to_edges(
     d: &DistortionFound,
@@ -33,7 +33,7 @@ pub fn snap_to_edges(
     width: usize,
     height: usize,
     max_move: f64,
-) -> Option<[Point; 4]> {
+) -> Option<([Point; 4], f64)> {
     let lens = d.lens(width, height)?;
     let lines = d.edge_lines?;
 
@@ -76,5 +76,5 @@ pub fn snap_to_edges(
         .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
         .fold(0.0, f64::max);
     (moved.is_finite() && moved <= max_move && crate::geometry::check_quad(&snapped).is_ok())
-        .then_some(snapped)
+        .then_some((snapped, moved))
 }
