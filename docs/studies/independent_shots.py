@@ -28,7 +28,10 @@ OTF_lens(f) · B(f cos θ) · B(f sin θ) · (1 + a (1 − G_d(f cos θ, f sin �
 
 Run: python3 docs/studies/independent_shots.py N SEED [KIND] (needs numpy,
 scipy, pillow and a release build: `cargo build --release`). KIND: jpeg75,
-jpeg85, png, sharpen, keystone, distort, light, all. Prints one line per shot
+jpeg85, png, sharpen, keystone, distort, light, all, tone (a camera's
+picture style: a tanh S-curve of strength 1–2.5 on the sRGB code), camera
+(all and tone). EXTRA="--tone file" passes options to `measure`;
+SHOW_TONE=1 prints the tone correction found. Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
 the chart modulation's error (printed 0.800).
 """
@@ -203,6 +206,10 @@ def render(p, rng):
         lin = lin + p["amount"] * (lin - blur)
     lin = np.clip(lin, 0, 1)
     srgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
+    if p["tone"] > 0:
+        # A camera's S-shaped picture style on top of sRGB: tanh of strength k about mid-grey code.
+        k = p["tone"]
+        srgb = 0.5 + 0.5 * np.tanh(k * (srgb - 0.5)) / math.tanh(k / 2)
     out = np.clip(np.round(srgb * 255), 0, 255).astype(np.uint8)
     corners = [distort(x, y, p) for x, y in dst]
     return out, corners
@@ -233,27 +240,30 @@ def draw(kind, rng):
         fmt="jpeg",
         quality=85,
         click=0.0,
+        tone=0.0,
     )
     # Chart frequencies chosen so the strip reaches ≈ 0.008 … 0.6 cy/px.
     px_per_mm = p["len_px"] / p["L"]
     p["f0"] = 0.008 * px_per_mm
     p["f1"] = 0.6 * px_per_mm
-    if kind in ("jpeg75", "all"):
+    if kind in ("jpeg75", "all", "camera"):
         p["quality"] = 75
     if kind == "png":
         p["fmt"] = "png"
-    if kind in ("sharpen", "all"):
+    if kind in ("sharpen", "all", "camera"):
         p["amount"] = u(0.3, 0.8)
         p["radius"] = u(0.8, 1.5)
-    if kind in ("keystone", "all"):
+    if kind in ("keystone", "all", "camera"):
         p["keystone"] = u(1.2, 1.5) if u() < 0.5 else 1 / u(1.2, 1.5)
-    if kind in ("distort", "all"):
+    if kind in ("distort", "all", "camera"):
         # −4…+4 % at the frame corner, strip near the top or bottom edge.
         d = u(-0.04, 0.04)
         mix = u(0, 1)
         p["k1"], p["k2"] = d * mix, d * (1 - mix)
         p["cy"] = H / 2 + (1 if u() < 0.5 else -1) * u(250, 320)
-    if kind in ("light", "all"):
+    if kind in ("tone", "camera"):
+        p["tone"] = u(1.0, 2.5)
+    if kind in ("light", "all", "camera"):
         p["vignette"] = 0.5
         p["gradient"] = u(0.3, 0.5)
         p["grad_dir"] = math.atan2(math.sin(p["theta"]), math.cos(p["theta"])) + (0 if u() < 0.5 else math.pi)
@@ -290,7 +300,8 @@ def measure(img, corners, p, tmp):
     jitter = np.random.default_rng(len(corners) + int(1e6 * p["theta"]) % 1000).uniform(-1, 1, 8) * p["click"]
     roi = ",".join(f"{v + j:.2f}" for v, j in zip([v for c in corners for v in c], jitter))
     out = os.path.join(tmp, "out")
-    r = subprocess.run([BIN, "measure", path, "--roi", roi, "--json", "-q", "-o", out], capture_output=True, text=True)
+    extra = os.environ.get("EXTRA", "").split()
+    r = subprocess.run([BIN, "measure", path, "--roi", roi, "--json", "-q", "-o", out, *extra], capture_output=True, text=True)
     if r.returncode != 0:
         return None, r.stderr.strip()
     j = json.loads(r.stdout)
@@ -307,6 +318,9 @@ def measure(img, corners, p, tmp):
     rms = math.sqrt(se / max(n, 1))
     f50 = (c.get("mtf50") or {}).get("cy_px")
     e50 = f50 / true_mtf50(p) - 1 if f50 else float("nan")
+    t = c.get("tone_correction")
+    if t and os.environ.get("SHOW_TONE"):
+        print(f"  tone: used {t['used']} {t['significance']:.1f} σ MTF at 0.5 {100 * t['mtf_change_at_half']:+.2f} % shift {t['max_shift_255']:.2f}/255", flush=True)
     return (rms, e50, c["chart_modulation"] / 0.8 - 1), None
 
 

@@ -43,9 +43,11 @@ pub struct MeasureFlags {
     /// Power-law tone instead of the default (1 = data already linear).
     #[arg(long, value_name = "G")]
     pub gamma: Option<f64>,
-    /// Tone curve: `chart` measures it from the target's grey/density patches.
-    #[arg(long, value_name = "chart", value_parser = parse_tone)]
-    pub tone: Option<bool>,
+    /// Tone curve: `strip` (default) takes a camera's own curve out from the
+    /// strip's low-frequency periods; `file` keeps the file's (or --gamma's);
+    /// `chart` measures it from the target's grey/density patches.
+    #[arg(long, value_name = "strip|file|chart", value_parser = parse_tone)]
+    pub tone: Option<ToneFlag>,
     /// Channel: luma | r | g | b | all (luma, r, g, b together, with the R−B colour moiré;
     /// raws: the green sites unless r, b or all).
     #[arg(long, default_value = "luma", value_name = "CH", value_parser = parse_channel)]
@@ -82,7 +84,7 @@ pub struct MeasureFlags {
 impl MeasureFlags {
     /// The measurement options, with the checks the library leaves to the command line.
     pub fn options(&self) -> Result<MeasureOptions, CliError> {
-        let tone_chart = self.tone.unwrap_or(false);
+        let tone_chart = self.tone == Some(ToneFlag::Chart);
         if tone_chart && self.gamma.is_some() {
             return Err(CliError::usage(
                 "--tone chart and --gamma exclude each other",
@@ -102,6 +104,7 @@ impl MeasureFlags {
             sweep: self.sweep,
             gamma: self.gamma,
             tone_chart,
+            tone_from_strip: self.tone != Some(ToneFlag::File),
             channel: self.channel,
             pixel_pitch_mm,
             bin_px: self.bin_px,
@@ -158,10 +161,23 @@ pub fn parse_channel(s: &str) -> Result<Channel, String> {
     Channel::parse(s).ok_or_else(|| format!("'{s}': use luma, r, g, b or all"))
 }
 
-fn parse_tone(s: &str) -> Result<bool, String> {
+/// Where `measure` takes the tone from (`--tone`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToneFlag {
+    /// The file's tone, corrected from the strip's shape (the default).
+    Strip,
+    /// The file's tone (or `--gamma`) only.
+    File,
+    /// The target's grey or density patches.
+    Chart,
+}
+
+fn parse_tone(s: &str) -> Result<ToneFlag, String> {
     match s {
-        "chart" => Ok(true),
-        other => Err(format!("'{other}': the only tone is 'chart'")),
+        "strip" => Ok(ToneFlag::Strip),
+        "file" => Ok(ToneFlag::File),
+        "chart" => Ok(ToneFlag::Chart),
+        other => Err(format!("'{other}': use strip, file or chart")),
     }
 }
 

@@ -224,7 +224,7 @@ pub(super) fn measure_frame_at(
         &o,
         RAW_CLIP,
         distortion,
-        false,
+        Default::default(),
     )
     .map_err(err)?;
     drop(groups);
@@ -368,8 +368,22 @@ fn measure_coded(
         opts,
         clip_level,
         distortion,
-        coarse_jpeg_quality(dec).is_some(),
+        super::strip::Coding {
+            block_ripple: coarse_jpeg_quality(dec).is_some(),
+            tone: strip_may_correct(opts, tone).then_some(tone),
+        },
     )
+}
+
+/// Whether a strip may find a camera's own tone curve on top of `tone` from
+/// its shape: not when the user chose the tone (`--gamma`, `--tone chart`
+/// or `--tone file`), nor on linear data.
+fn strip_may_correct(opts: &MeasureOptions, tone: &crate::photo::linearise::Tone) -> bool {
+    use crate::photo::linearise::Tone;
+    opts.tone_from_strip
+        && opts.gamma.is_none()
+        && !opts.tone_chart
+        && !matches!(tone, Tone::Gamma(g) if *g == 1.0)
 }
 
 /// Below this IJG quality a JPEG's block quantisation visibly moves its MTF.

@@ -32,6 +32,7 @@ pub mod model_overlay;
 pub mod moire;
 pub mod patches;
 pub mod profile;
+pub mod sine_tone;
 pub mod synth;
 
 mod frame;
@@ -315,7 +316,14 @@ pub fn measure_planes(
     let distortion = given_distortion(opts, roi, size.0, size.1)?;
     let views = plane_views(groups);
     measure_planes_lens(
-        &views, size, roi, target, opts, clip_level, distortion, false,
+        &views,
+        size,
+        roi,
+        target,
+        opts,
+        clip_level,
+        distortion,
+        strip::Coding::default(),
     )
 }
 
@@ -400,9 +408,8 @@ fn resolve_distortion<'a>(
     Ok(tried.into_iter().max_by_key(|d| d.edge_points))
 }
 
-/// [`measure_planes`] with the distortion already resolved; `block_ripple`:
-/// the planes are a coarse JPEG's luma, whose block quantisation ripples the
-/// curve (smoothed, [`strip`]).
+/// [`measure_planes`] with the distortion already resolved and what the
+/// planes' coding leaves for the strips to take out ([`strip::Coding`]).
 #[allow(clippy::too_many_arguments)]
 fn measure_planes_lens(
     groups: &[(&str, Vec<PlaneRef>)],
@@ -412,7 +419,7 @@ fn measure_planes_lens(
     opts: &MeasureOptions,
     clip_level: f32,
     distortion: Option<DistortionFound>,
-    block_ripple: bool,
+    coding: strip::Coding,
 ) -> Result<Measurement, Failure> {
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
@@ -441,16 +448,7 @@ fn measure_planes_lens(
         let one = |(id, strip, tlaw, contrast): &StripSpec| {
             let measured = |seed: Option<PhaseLaw>| {
                 measure_strip(
-                    plane_refs,
-                    name,
-                    id,
-                    strip,
-                    *tlaw,
-                    seed,
-                    *contrast,
-                    opts,
-                    &bin_opts,
-                    block_ripple,
+                    plane_refs, name, id, strip, *tlaw, seed, *contrast, opts, &bin_opts, coding,
                 )
             };
             // A channel whose own crossings cannot be followed (red or blue
@@ -493,7 +491,17 @@ fn measure_planes_lens(
                     100.0 * c.clipped_fraction
                 ));
             }
-            if block_ripple {
+            if let Some(f) = &c.tone_fix
+                && (f.used || f.needed())
+            {
+                let line = format!("{name}/{}: {}", c.sweep_id, f.describe());
+                if f.used {
+                    notes.push(line);
+                } else {
+                    warnings.push(line);
+                }
+            }
+            if coding.block_ripple {
                 let drift = strip::bar_drift_px(&c);
                 if drift < strip::SQUARE_DRIFT_PX {
                     square.push((format!("{name}/{}", c.sweep_id), drift));

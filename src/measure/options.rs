@@ -37,6 +37,10 @@ pub struct MeasureOptions {
     pub gamma: Option<f64>,
     /// Tone curve from the target's grey patches (`--tone chart`).
     pub tone_chart: bool,
+    /// Without `--gamma` or `--tone chart`: a camera's own tone curve on top
+    /// of the file's is found from each strip's low-frequency periods and
+    /// taken out ([`super::sine_tone`]; off: `--tone file`).
+    pub tone_from_strip: bool,
     /// Channel(s) to measure.
     pub channel: Channel,
     /// Pixel pitch (mm), when known, for cycles/mm on the sensor.
@@ -86,6 +90,7 @@ impl Default for MeasureOptions {
             sweep: SweepChoice::Auto,
             gamma: None,
             tone_chart: false,
+            tone_from_strip: true,
             channel: Channel::Luma,
             pixel_pitch_mm: None,
             bin_px: 0.25,

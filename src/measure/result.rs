@@ -111,6 +111,10 @@ pub struct Curve {
     pub alias_line_px: Option<[Point; 2]>,
     /// Image segment across the strip at the lowest and highest measured points.
     pub measured_lines_px: [[Point; 2]; 2],
+    /// The camera tone curve found in the strip's shape, if it was looked for
+    /// ([`super::sine_tone`]); in the summary JSON as `tone_correction`.
+    #[serde(skip)]
+    pub tone_fix: Option<super::sine_tone::ToneFix>,
 }
 
 /// A small RGB picture of the measured area, for the region plot.

@@ -12,9 +12,10 @@ use super::frequency::{
 };
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
-use super::{curve, law_guess, normalise};
+use super::{curve, law_guess, normalise, sine_tone};
 use crate::geometry::Point;
 use crate::photo::PlaneRef;
+use crate::photo::linearise::Tone;
 use rayon::prelude::*;
 
 /// Largest σ (cy/px) of the smoothing of a coarse JPEG's curve.
@@ -24,6 +25,16 @@ pub const RIPPLE_SIGMA_REL: f64 = 0.25;
 
 /// Refuse when more than this fraction of the region is clipped.
 const CLIP_REFUSE: f64 = 0.02;
+
+/// How a strip's planes were coded, for what the strip may take out of them.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Coding<'a> {
+    /// A coarse JPEG's luma, whose block quantisation ripples the curve (smoothed).
+    pub block_ripple: bool,
+    /// The tone the planes were decoded with, where a camera's own tone
+    /// curve on top of it may be found from the strip's shape and taken out.
+    pub tone: Option<&'a Tone>,
+}
 
 /// Measures one strip of one plane; without a target law, `seed` (another
 /// channel's law of the same strip), when given, is refined instead of a law
@@ -39,7 +50,7 @@ pub(super) fn measure_strip(
     contrast: Option<f64>,
     opts: &MeasureOptions,
     bin_opts: &BinOptions,
-    block_ripple: bool,
+    coding: Coding,
 ) -> Result<Curve, Failure> {
     let scale_mid = strip.scale_at(0.5 * strip.length);
     let len_px = strip.length / scale_mid.s_per_px;
@@ -49,7 +60,7 @@ pub(super) fn measure_strip(
             "the strip is {len_px:.0}×{wid_px:.1} px inside its margins; it cannot hold 5 cycles"
         )));
     }
-    let prof = bin_planes(planes, strip, bin_opts);
+    let mut prof = bin_planes(planes, strip, bin_opts);
     if prof.s.len() < 20 {
         return Err(Failure::TooSmall(format!(
             "only {} bins fall inside the region",
@@ -151,6 +162,13 @@ pub(super) fn measure_strip(
             "{channel}/{id}: the frequency does not rise along the strip (corners 1 and 4 must be on the low-frequency edge)"
         )));
     }
+    // A camera's own tone curve, found from the low end's shape and taken out.
+    let tone_fix = coding
+        .tone
+        .and_then(|t| sine_tone::fit(&prof, &law, &s_per_px, t));
+    if let Some(f) = &tone_fix {
+        sine_tone::apply(f, &mut prof);
+    }
     let grid = output_grid(&law, prof.s[0], prof.s[prof.s.len() - 1]);
     let est = opts.method.estimator(opts.window_cycles);
     // The modulation, and beside it the data-based aliasing check (the
@@ -230,7 +248,7 @@ pub(super) fn measure_strip(
     }
     // The block ripple is smoothed after the chart modulation is read from the
     // low end, so the lowest points stay independent (and unbent by the smoothing).
-    if block_ripple {
+    if coding.block_ripple {
         smooth_block_ripple(&mut points);
     }
     normalise::normalise(&mut points, m_chart, m_chart_err);
@@ -287,6 +305,7 @@ pub(super) fn measure_strip(
         },
         alias_line_px: alias_line,
         measured_lines_px: [across(s_first), across(s_last)],
+        tone_fix,
     })
 }
 

@@ -65,6 +65,19 @@ pub struct Nuisances {
     pub rgb_gains: Option<[f64; 3]>,
     /// JPEG with 4:2:0 chroma subsampling (else 4:4:4 through `image`).
     pub chroma_420: bool,
+    /// A camera's picture style on top of sRGB: the code c becomes
+    /// ½ + ½·tanh(k(c − ½))/tanh(k/2), strength k (0 = none; 2 is a
+    /// "standard" style's contrast). The file still reads as sRGB.
+    pub picture_style: f64,
+}
+
+/// A picture style's S-curve of strength `k` on a code (0–1); `k` = 0 leaves it.
+pub fn picture_style(c: f64, k: f64) -> f64 {
+    if k == 0.0 {
+        c
+    } else {
+        0.5 + 0.5 * (k * (c - 0.5)).tanh() / (0.5 * k).tanh()
+    }
 }
 
 impl Default for Nuisances {
@@ -75,6 +88,7 @@ impl Default for Nuisances {
             usm: None,
             rgb_gains: None,
             chroma_420: false,
+            picture_style: 0.0,
         }
     }
 }
@@ -169,7 +183,8 @@ impl SynthShot {
                 }
                 None => v,
             };
-            (255.0 * linear_to_srgb(v.clamp(0.0, 1.0))).round() as u8
+            let c = linear_to_srgb(v.clamp(0.0, 1.0));
+            (255.0 * picture_style(c, self.nuisance.picture_style)).round() as u8
         };
         let codes: Vec<u8> = lin
             .iter()
@@ -353,7 +368,8 @@ pub fn wide_strip_shot() -> SynthShot {
 
 /// The shots of issue 15's nuisances, with exact truth: illumination 3:1 along
 /// the strip with 50 % vignetting, a keystoned linear sweep (one end 1.5× the
-/// other's height), unsharp-mask sharpening peaking near 1.15, and RGB JPEG
+/// other's height), unsharp-mask sharpening peaking near 1.15, a camera's
+/// picture style (an S-curve of strength 2 on top of sRGB), and RGB JPEG
 /// q75 with 4:2:0 chroma and noise. `variant` moves the strip, its size, turn
 /// and blur a little (0 is the set the report uses; tests use others).
 pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
@@ -432,6 +448,17 @@ pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
             sigma_px: 0.92 + 0.02 * u(),
             nuisance: Nuisances {
                 usm: Some((1.0, 1.5)),
+                ..Nuisances::default()
+            },
+            ..base.clone()
+        },
+        SynthShot {
+            name: "picture_style2".into(),
+            // Paper white at 0.66 of clipping: the sine about a third, where
+            // a picture style bends the modulation most.
+            mean: 0.33,
+            nuisance: Nuisances {
+                picture_style: 2.0,
                 ..Nuisances::default()
             },
             ..base.clone()

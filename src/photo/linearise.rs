@@ -126,6 +126,15 @@ pub fn file_tone(dec: &Decoded) -> (Tone, Option<String>) {
 }
 
 impl Tone {
+    /// A short name: `srgb`, `gamma G` or `curve`.
+    pub fn name(&self) -> String {
+        match self {
+            Tone::Srgb => "srgb".into(),
+            Tone::Gamma(g) => format!("gamma {g}"),
+            Tone::Curve(_) => "curve".into(),
+        }
+    }
+
     /// Linear value of a code value scaled to 0–1.
     pub fn apply(&self, code: f64) -> f64 {
         match self {

@@ -59,6 +59,16 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                 "clipped_fraction": c.clipped_fraction,
                 "points": c.points.len(),
                 "points_aliased": c.points.iter().filter(|p| p.aliased).count(),
+                "tone_correction": c.tone_fix.as_ref().map(|f| json!({
+                    "used": f.used,
+                    "base": f.base.name(),
+                    "passes": f.passes.len(),
+                    "significance": f.significance,
+                    "mtf_change_at_half": -f.effect,
+                    "max_shift_255": f.max_shift_255,
+                    "code_range": [f.code_range.0, f.code_range.1],
+                    "windows": f.windows,
+                })),
                 "sweep_law": {
                     "kind": c.law.kind,
                     "strip_unit": c.strip_unit,

@@ -16,10 +16,19 @@ use sweepmtf::photo::decode::decode_bytes;
 /// Measured from the file's bytes as `sweepmtf measure` reads them (a JPEG's
 /// luminance from its Y′ plane alone).
 fn run(shot: &SynthShot, seed: u64) -> (f64, f64, f64, f64) {
+    run_with(shot, seed, MeasureOptions::default()).0
+}
+
+/// [`run`] with other options; also gives the measurement's notes.
+fn run_with(
+    shot: &SynthShot,
+    seed: u64,
+    base: MeasureOptions,
+) -> ((f64, f64, f64, f64), Vec<String>) {
     let opts = MeasureOptions {
         roi: Some(shot.quad),
         refine_roi: true,
-        ..MeasureOptions::default()
+        ..base
     };
     let m = measure_bytes(&shot.encode(seed), &shot.name, None, &opts)
         .unwrap_or_else(|e| panic!("{}: {e}", shot.name));
@@ -48,10 +57,13 @@ fn run(shot: &SynthShot, seed: u64) -> (f64, f64, f64, f64) {
     }
     let f50 = c.figures.mtf50_cy_px.expect("MTF50 measured");
     (
-        (se / n as f64).sqrt(),
-        f50 / lo - 1.0,
-        c.chart_modulation,
-        c.chart_modulation_err,
+        (
+            (se / n as f64).sqrt(),
+            f50 / lo - 1.0,
+            c.chart_modulation,
+            c.chart_modulation_err,
+        ),
+        m.notes.clone(),
     )
 }
 
@@ -83,6 +95,40 @@ fn check(name: &str, bar: f64) {
 #[test]
 fn illumination_3_to_1_with_50_percent_vignetting_within_0_008() {
     check("light3_vignette50", 0.008);
+}
+
+/// A camera's picture style (an S-curve of strength 2 on top of the sRGB the
+/// file declares) bends every period; read through sRGB alone the curve is
+/// off, and the strip's own shape gives the curve back. The chart modulation
+/// is not held: an offset of the light leaves a sine a sine, so it stays as
+/// the file's tone reads it (and the note says so).
+#[test]
+fn a_camera_picture_style_is_found_from_the_strip_and_taken_out() {
+    for variant in [7u64, 12] {
+        let shot = nuisance_cases(variant)
+            .into_iter()
+            .find(|s| s.name == "picture_style2")
+            .unwrap();
+        let file_only = MeasureOptions {
+            tone_from_strip: false,
+            ..MeasureOptions::default()
+        };
+        let ((rms0, e0, _, _), _) = run_with(&shot, 100 + variant, file_only);
+        let ((rms, e50, cm, _), notes) = run_with(&shot, 100 + variant, MeasureOptions::default());
+        eprintln!(
+            "picture style v{variant}: file's tone RMS {rms0:.4} MTF50 {e0:+.4}; \
+             from the strip RMS {rms:.4} MTF50 {e50:+.4} chart {cm:.4}"
+        );
+        assert!(rms0 > 0.012 && e0 > 0.025, "{rms0} {e0}");
+        assert!(rms <= 0.006, "v{variant}: RMS {rms:.4}");
+        assert!(e50.abs() <= 0.01, "v{variant}: MTF50 off by {e50:+.4}");
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("not sine-shaped") && n.contains("taken out")),
+            "{notes:?}"
+        );
+    }
 }
 
 #[test]
