@@ -320,7 +320,7 @@ def measure(img, corners, p, tmp):
     e50 = f50 / true_mtf50(p) - 1 if f50 else float("nan")
     t = c.get("tone_correction")
     if t and os.environ.get("SHOW_TONE"):
-        print(f"  tone: used {t['used']} {t['significance']:.1f} σ MTF at 0.5 {100 * t['mtf_change_at_half']:+.2f} % shift {t['max_shift_255']:.2f}/255", flush=True)
+        print(f"  tone: used {t['used']} {t['significance']:.1f} σ MTF at 0.5 {100 * t['mtf_change_at_half']:+.2f} % shift {t['max_shift_255']:.2f}/255 light {t['light_ratio']:.2f}", flush=True)
     return (rms, e50, c["chart_modulation"] / 0.8 - 1), None
 
 

@@ -275,10 +275,13 @@ def _options(
 ) -> str:
     gamma: Optional[float] = None
     tone_chart = False
+    tone_from_strip = True
     if tone is None:
         pass
     elif isinstance(tone, str) and tone == "chart":
         tone_chart = True
+    elif isinstance(tone, str) and tone == "file":
+        tone_from_strip = False
     elif isinstance(tone, str) and tone == "linear":
         gamma = 1.0
     elif isinstance(tone, str) and tone == "srgb":
@@ -291,7 +294,9 @@ def _options(
         if not (np.isfinite(gamma) and gamma > 0):
             raise ValueError(f"tone (gamma) {tone} must be a positive number")
     else:
-        raise ValueError(f"tone {tone!r}: use None, 'srgb', 'linear', 'chart' or a gamma (number)")
+        raise ValueError(
+            f"tone {tone!r}: use None, 'srgb', 'file', 'linear', 'chart' or a gamma (number)"
+        )
     if method not in ("extrema", "fit", "envelope"):
         raise ValueError(f"method '{method}': use extrema, fit or envelope")
     if sweep not in ("auto", "linear", "log"):
@@ -312,6 +317,7 @@ def _options(
         "sweep": sweep,
         "gamma": gamma,
         "tone_chart": tone_chart,
+        "tone_from_strip": tone_from_strip,
         "channel": channel,
         "pixel_pitch_mm": pitch_mm,
         "bin_px": float(bin_px),
@@ -354,8 +360,11 @@ def measure(
     target: target description file (chart TOML or sineMTF tgt.txt); with it and
       no roi the chart is found from its fiducials.
     tone: how code values map to linear light: None = the default (sRGB for
-      8-bit, linear for 16-bit and float), 'srgb', 'linear', a gamma (number), or
-      'chart' (from the target's grey patches).
+      8-bit, linear for 16-bit and float; a camera's own tone curve on top of
+      it is found from each strip's low-frequency periods and taken out),
+      'srgb' (the same, for uint8 arrays), 'file' (the file's or the default
+      tone only), 'linear', a gamma (number), or 'chart' (from the target's
+      grey patches).
     pixel_pitch_um: pixel pitch in micrometres, for cycles/mm (files: default from EXIF).
     refine_roi: refine the roi corners to the region's edges (the CLI's default).
     bin_px, margin, window_cycles: bin width (px), strip margin (fraction), estimator window (cycles).

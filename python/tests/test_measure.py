@@ -149,6 +149,34 @@ def test_array_kinds_agree():
     assert np.max(np.abs(wrong.curves[0].modulation[low] - 0.6)) > 0.02
 
 
+def test_a_camera_tone_curve_is_taken_out_unless_tone_file():
+    """A uint8 sweep coded sRGB + a picture style's S-curve: the default finds
+    the curve from the strip's shape; tone='file' reads it through sRGB alone."""
+    h, w = 120, 900
+    x = np.arange(w) + 0.5
+    f = 0.02 + (0.35 - 0.02) * x / w
+    truth = np.exp(-((f / 0.25) ** 2))  # the amplitude's fall: the MTF to find
+    lin = 0.35 * (1 + 0.8 * truth * np.sin(2 * np.pi * np.cumsum(f)))
+    srgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * lin ** (1 / 2.4) - 0.055)
+    k = 2.0
+    code = 0.5 + 0.5 * np.tanh(k * (srgb - 0.5)) / np.tanh(k / 2)
+    img = np.tile(np.round(code * 255).astype(np.uint8), (h, 1))
+
+    def worst(m):
+        c = m.curves[0]
+        ok = (c.freq_cy_px > 0.05) & (c.freq_cy_px < 0.3) & ~c.aliased
+        expect = np.exp(-((c.freq_cy_px[ok] / 0.25) ** 2))
+        return np.max(np.abs(c.mtf[ok] - expect))
+
+    fixed = sweepmtf.measure(img, roi=STRIP_ROI, refine_roi=False)
+    found = fixed.summary["curves"][0]["tone_correction"]
+    assert found["used"] and found["significance"] > 5, found
+    assert any("not sine-shaped" in n for n in fixed.notes), fixed.notes
+    kept = sweepmtf.measure(img, roi=STRIP_ROI, refine_roi=False, tone="file")
+    assert kept.summary["curves"][0]["tone_correction"] is None
+    assert worst(fixed) < 0.01 < worst(kept), (worst(fixed), worst(kept))
+
+
 def test_outputs(tmp_path):
     m = sweepmtf.measure(SHOT, target=TARGET)
     m.to_csv(tmp_path / "a.csv")

@@ -500,6 +500,13 @@ fn measure_planes_lens(
                 } else {
                     warnings.push(line);
                 }
+                if f.uneven_light() {
+                    warnings.push(format!(
+                        "{name}/{}: {}",
+                        c.sweep_id,
+                        f.uneven_light_warning()
+                    ));
+                }
             }
             if coding.block_ripple {
                 let drift = strip::bar_drift_px(&c);

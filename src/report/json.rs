@@ -68,6 +68,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                     "max_shift_255": f.max_shift_255,
                     "code_range": [f.code_range.0, f.code_range.1],
                     "windows": f.windows,
+                    "light_ratio": f.light_ratio,
                 })),
                 "sweep_law": {
                     "kind": c.law.kind,
