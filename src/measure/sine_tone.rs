@@ -142,8 +142,8 @@ impl ToneFix {
         };
         format!(
             "the strip's low-frequency periods are not sine-shaped through the file's tone \
-             (a camera's own tone curve): codes {:.0}–{:.0} off by up to {:.1}/255 ({:.0} σ), \
-             which moves the MTF at 0.5 by {:+.1} %; {what}",
+             (a camera's own tone curve): codes {:.0}–{:.0} off by up to {:.1}/255 ({:.0} σ); \
+             read through it, an MTF of 0.5 comes out {:+.1} % off; {what}",
             255.0 * lo,
             255.0 * hi,
             self.max_shift_255,
