@@ -97,7 +97,7 @@ pub struct ToneFix {
     /// Windows read.
     pub windows: usize,
     /// The light's largest ratio along the strip (the brightest of eight
-    /// equal stretches' mean over the darkest).
+    /// equal stretches' mean over the darkest; 1 where the correction is not used).
     pub light_ratio: f64,
     /// Whether it is applied (significant, large enough, values kept in order).
     pub used: bool,
@@ -462,11 +462,14 @@ pub fn fit(
         .map(|&(c, v)| 255.0 * (code_of(base, v) - c).abs())
         .fold(0.0, f64::max);
     let in_order = corrected.windows(2).all(|p| p[1].1 > p[0].1);
-    fix.light_ratio = light_ratio(prof, law, &|v| fix.linear(v));
     let (vlo, vhi) = (base.apply(lo), base.apply(hi));
     fix.effect = effect_at_half(&|v| fix.linear(v), 0.5 * (vlo + vhi), 0.5 * (vhi - vlo));
     fix.used =
         fix.needed() && in_order && fix.passes.iter().flat_map(|p| p.coef).all(f64::is_finite);
+    // The light along the whole strip is read only for a correction that is used.
+    if fix.used {
+        fix.light_ratio = light_ratio(prof, law, &|v| fix.linear(v));
+    }
     Some(fix)
 }
 
