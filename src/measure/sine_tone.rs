@@ -5,18 +5,21 @@
 //! The chart's sine is printed in reflectance and a lens is linear, so in
 //! linear light every period is a pure sine, whatever the MTF. A tone curve
 //! that the decoding does not undo bends it: harmonics appear, and the
-//! modulation read depends on the amplitude (a residual gamma of 1.2 reads
-//! the normalised MTF ≈ 4 % high at 0.5). Camera JPEGs carry such curves
-//! (simulated sRGB + a tanh S-curve of strength 1–2.5 in code: MTF50
-//! +1…+6 %).
+//! modulation read depends on the amplitude (a sine about a third of
+//! clipping through a tanh S-curve of strength 2 on the sRGB code reads an
+//! MTF of 0.5 as 0.53). Camera JPEGs carry such curves (simulated sRGB + a
+//! tanh S-curve of strength 1–2.5 in code: MTF50 up to +6 %).
 //!
 //! The correction is linear in light: `v' = v + Σ βⱼ ψⱼ(c)`, with `c` the
 //! code the file's tone gives the decoded value `v`, and ψⱼ the first-order
-//! effects of a cubic correction of the code (`D'(c)·uᵏ`, k ≤ 3, `u` the
-//! code scaled to the range read) made orthogonal to `1` and `v` over the
-//! data. An affine change of the linear values (an offset, a gain) leaves
-//! every period a sine, so the shape cannot tell it: it is left out, and the
-//! chart modulation stays as the file's tone reads it. Over windows of
+//! effects of a quintic correction of the code (`D'(c)·uᵏ`, k < [`TERMS`],
+//! `u` the code scaled to the range read) made orthogonal to `1` and `v`
+//! over the data; up to [`MAX_PASSES`] passes, each fitting what the ones
+//! before left. An affine change of the linear values (an offset, a gain)
+//! leaves every period a sine, so the shape cannot tell it: it is left out,
+//! and the chart modulation stays as the file's tone reads it; where the
+//! light changes along the strip that unseen offset also bends the MTF
+//! (warned above [`MAX_EVEN_LIGHT`]). Over windows of
 //! [`WINDOW_CYCLES`] cycles at the strip's low end the values must be a
 //! local mean, a sine and a cosine at the law's phase, each with a linear
 //! trend (light); β is their weighted least-squares fit with the windows'
