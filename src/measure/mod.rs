@@ -491,8 +491,9 @@ fn measure_planes_lens(
                     100.0 * c.clipped_fraction
                 ));
             }
+            // A used correction is needed; one needed but unused is a warning.
             if let Some(f) = &c.tone_fix
-                && (f.used || f.needed())
+                && f.needed()
             {
                 let line = format!("{name}/{}: {}", c.sweep_id, f.describe());
                 if f.used {

@@ -283,14 +283,13 @@ fn windows(
 }
 
 /// The correction's directions: the functions D'(c)·uᵏ made orthonormal to
-/// 1, v and each other over the rows (weighted Gram–Schmidt), as
-/// coefficient vectors over the functions; a function (nearly) inside the
-/// span of those before it is dropped.
-fn directions(rows: &[&Row], base: &Tone, mh: (f64, f64)) -> Vec<[f64; NF]> {
-    let vals: Vec<[f64; NF]> = rows.iter().map(|r| functions(base, r.c, r.v, mh)).collect();
+/// 1, v and each other over the rows (weighted Gram–Schmidt; `vals`: each
+/// row's functions), as coefficient vectors over the functions; a function
+/// (nearly) inside the span of those before it is dropped.
+fn directions(rows: &[&Row], vals: &[[f64; NF]]) -> Vec<[f64; NF]> {
     let dot = |a: &[f64; NF], b: &[f64; NF]| -> f64 {
         rows.iter()
-            .zip(&vals)
+            .zip(vals)
             .map(|(r, f)| {
                 let x: f64 = a.iter().zip(f).map(|(p, q)| p * q).sum();
                 let y: f64 = b.iter().zip(f).map(|(p, q)| p * q).sum();
@@ -326,24 +325,23 @@ fn directions(rows: &[&Row], base: &Tone, mh: (f64, f64)) -> Vec<[f64; NF]> {
 /// Per window, the Schur complement of the window parameters in the
 /// weighted Gram matrix of [X | Ψ | v]: adds the profiled normal matrix to
 /// `a` and the profiled right side to `b` (unused directions stay 0), and
-/// returns the window's residual sum of squares with no correction.
+/// returns the window's residual sum of squares with no correction
+/// (`vals`: each row's functions).
 fn profiled(
     rows: &[Row],
+    vals: &[[f64; NF]],
     dirs: &[[f64; NF]],
-    base: &Tone,
-    mh: (f64, f64),
     a: &mut [[f64; TERMS]; TERMS],
     b: &mut [f64; TERMS],
 ) -> Option<f64> {
     const M: usize = NX + TERMS + 1;
     let k = dirs.len();
     let mut g = [[0.0; M]; M];
-    for r in rows {
-        let f = functions(base, r.c, r.v, mh);
+    for (r, f) in rows.iter().zip(vals) {
         let mut z = [0.0; M];
         z[..NX].copy_from_slice(&r.x);
         for (j, d) in dirs.iter().enumerate() {
-            z[NX + j] = d.iter().zip(&f).map(|(p, q)| p * q).sum();
+            z[NX + j] = d.iter().zip(f).map(|(p, q)| p * q).sum();
         }
         z[M - 1] = r.v;
         for i in 0..M {
@@ -499,14 +497,18 @@ fn fit_pass(wins: &[Vec<Row>], base: &Tone) -> Option<PassFit> {
         return None;
     }
     let mh = (0.5 * (lo + hi), 0.5 * (hi - lo));
-    let dirs = directions(&all, base, mh);
+    // Each row's functions, once per pass (the directions and the fit read them).
+    let vals: Vec<[f64; NF]> = all.iter().map(|r| functions(base, r.c, r.v, mh)).collect();
+    let dirs = directions(&all, &vals);
     if dirs.is_empty() {
         return None;
     }
     let (mut a, mut b) = ([[0.0; TERMS]; TERMS], [0.0; TERMS]);
     let mut rss0 = 0.0;
+    let mut at = 0;
     for w in wins {
-        rss0 += profiled(w, &dirs, base, mh, &mut a, &mut b)?;
+        rss0 += profiled(w, &vals[at..at + w.len()], &dirs, &mut a, &mut b)?;
+        at += w.len();
     }
     // Unused directions: identity rows, so the padded system stays regular.
     for j in dirs.len()..TERMS {
