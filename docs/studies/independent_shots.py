@@ -261,9 +261,9 @@ def draw(kind, rng):
         mix = u(0, 1)
         p["k1"], p["k2"] = d * mix, d * (1 - mix)
         p["cy"] = H / 2 + (1 if u() < 0.5 else -1) * u(250, 320)
-    if kind in ("tone", "camera"):
+    if kind in ("tone", "camera", "tonelight"):
         p["tone"] = u(1.0, 2.5)
-    if kind in ("light", "all", "camera"):
+    if kind in ("light", "all", "camera", "tonelight"):
         p["vignette"] = 0.5
         p["gradient"] = u(0.3, 0.5)
         p["grad_dir"] = math.atan2(math.sin(p["theta"]), math.cos(p["theta"])) + (0 if u() < 0.5 else math.pi)
@@ -300,6 +300,8 @@ def measure(img, corners, p, tmp):
     jitter = np.random.default_rng(len(corners) + int(1e6 * p["theta"]) % 1000).uniform(-1, 1, 8) * p["click"]
     roi = ",".join(f"{v + j:.2f}" for v, j in zip([v for c in corners for v in c], jitter))
     out = os.path.join(tmp, "out")
+    with open(os.path.join(tmp, "roi.txt"), "w") as fh:
+        fh.write(roi)
     extra = os.environ.get("EXTRA", "").split()
     r = subprocess.run([BIN, "measure", path, "--roi", roi, "--json", "-q", "-o", out, *extra], capture_output=True, text=True)
     if r.returncode != 0:
@@ -321,6 +323,11 @@ def measure(img, corners, p, tmp):
     t = c.get("tone_correction")
     if t and os.environ.get("SHOW_TONE"):
         print(f"  tone: used {t['used']} {t['significance']:.1f} σ MTF at 0.5 {100 * t['mtf_change_at_half']:+.2f} % shift {t['max_shift_255']:.2f}/255 light {t['light_ratio']:.2f}", flush=True)
+        b = t.get("black_level")
+        if b and b["offset"] is None:
+            print(f"  black: not found: {b['why_not']}", flush=True)
+        elif b:
+            print(f"  black: used {b['used']} {100 * b['relative_to_mean']:+.2f} % ± {100 * b['offset_err'] / max(abs(b['offset']), 1e-12) * abs(b['relative_to_mean']):.2f} spread {b['light_spread']:.2f} resid {100 * b['residual']:.3f} % bands {b['bands']} {b['why_not']}", flush=True)
     return (rms, e50, c["chart_modulation"] / 0.8 - 1), None
 
 

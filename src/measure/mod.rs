@@ -34,6 +34,7 @@ pub mod patches;
 pub mod profile;
 pub mod sine_tone;
 pub mod synth;
+pub mod tone_black;
 
 mod frame;
 mod frequency;
@@ -500,6 +501,11 @@ fn measure_planes_lens(
                     notes.push(line);
                 } else {
                     warnings.push(line);
+                }
+                if let Some(b) = &f.black
+                    && (b.used || f.light_ratio > sine_tone::MAX_EVEN_LIGHT)
+                {
+                    notes.push(format!("{name}/{}: {}", c.sweep_id, b.describe()));
                 }
                 if f.uneven_light() {
                     warnings.push(format!(

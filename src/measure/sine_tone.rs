@@ -104,6 +104,9 @@ pub struct ToneFix {
     pub light_ratio: f64,
     /// Whether it is applied (significant, large enough, values kept in order).
     pub used: bool,
+    /// The black level the curve leaves unseen, from the paper beside the
+    /// strip (read only when used; see [`super::tone_black`]).
+    pub black: Option<super::tone_black::BlackLevel>,
 }
 
 impl ToneFix {
@@ -121,7 +124,9 @@ impl ToneFix {
     /// Whether the light changes so much along the strip that the curve's
     /// unseen offset moves the MTF's shape (a warning when used).
     pub fn uneven_light(&self) -> bool {
-        self.used && self.light_ratio > MAX_EVEN_LIGHT
+        self.used
+            && self.light_ratio > MAX_EVEN_LIGHT
+            && !self.black.as_ref().is_some_and(|b| b.used)
     }
 
     /// The warning for [`Self::uneven_light`].
@@ -426,6 +431,7 @@ pub fn fit(
         windows: first.windows,
         light_ratio: 1.0,
         used: false,
+        black: None,
     };
     let mut last = first;
     while fix.passes.len() < MAX_PASSES

@@ -12,7 +12,7 @@ use super::frequency::{
 };
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
-use super::{curve, law_guess, normalise, sine_tone};
+use super::{curve, law_guess, normalise, sine_tone, tone_black};
 use crate::geometry::Point;
 use crate::photo::PlaneRef;
 use crate::photo::linearise::Tone;
@@ -166,8 +166,26 @@ pub(super) fn measure_strip(
     let tone_fix = coding
         .tone
         .and_then(|t| sine_tone::fit(&prof, &law, &s_per_px, t));
-    if let Some(f) = &tone_fix {
+    let mut tone_fix = tone_fix;
+    if let Some(f) = &mut tone_fix
+        && f.used
+    {
         sine_tone::apply(f, &mut prof);
+        // Its black level, from the paper beside the strip where the light changes.
+        let paper: Vec<_> = tone_black::bands(strip)
+            .iter()
+            .map(|b| {
+                let o = BinOptions {
+                    margin: 0.0,
+                    ..*bin_opts
+                };
+                bin_planes(planes, b, &o)
+            })
+            .collect();
+        f.black = tone_black::find(&prof, &paper, &law, f);
+        if let Some(b) = &f.black {
+            tone_black::apply(b, &mut prof);
+        }
     }
     let grid = output_grid(&law, prof.s[0], prof.s[prof.s.len() - 1]);
     let est = opts.method.estimator(opts.window_cycles);

@@ -69,6 +69,17 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                     "code_range": [f.code_range.0, f.code_range.1],
                     "windows": f.windows,
                     "light_ratio": f.light_ratio,
+                    "black_level": f.black.as_ref().map(|b| json!({
+                        "used": b.used,
+                        "offset": b.offset,
+                        "offset_err": b.sigma,
+                        "relative_to_mean": b.relative,
+                        "stretches": b.stretches,
+                        "bands": b.bands,
+                        "light_spread": b.light_spread,
+                        "residual": b.residual,
+                        "why_not": b.why_not,
+                    })),
                 })),
                 "sweep_law": {
                     "kind": c.law.kind,

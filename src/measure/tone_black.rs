@@ -1,0 +1,324 @@
+//! The black level a camera's tone curve leaves unseen, found from the paper
+//! around the strip where the light changes along it.
+//!
+//! [`super::sine_tone`] makes a strip's values affine in light,
+//! `v' = α + β·ℓ`: an offset α leaves every period a sine, so the strip's
+//! shape cannot tell it. The modulation read is then `m·L/(L + α/(βM))`
+//! (L the light, M the strip's mean reflectance): under even light only the
+//! chart modulation is scaled (divided out), but where the light changes
+//! along the strip the MTF's shape bends (independent camera, picture style
+//! with light 1.5–2.1:1: MTF50 off by up to ±5 %).
+//!
+//! The paper around the strip sees the same light through the same curve:
+//! beside stretch k, `s_k = α + β·W·L_k`, while the strip's mean over whole
+//! periods (whatever the MTF) is `m_k = α + β·M·L_k`. So `m = c0 + c1·s`
+//! with `c1 = M/W` and `c0 = α(1 − c1)`: where the light changes, a line
+//! through the stretches gives α. A light that is a product of a profile
+//! along the strip and one across it (a gradient, most of a vignette) only
+//! scales `s` and leaves α. Two bands are read, [`GAP_PX`] beyond each long
+//! edge and [`DEPTH_PX`] deep; each gives α alone, and they must agree
+//! (another strip, a label or the card's edge in a band shows as a
+//! disagreement or a poor line). Used only where the light changes enough
+//! ([`MIN_LIGHT_SPREAD`]), the line holds ([`MAX_RESIDUAL`]), α is
+//! significant ([`MIN_SIGNIFICANCE`]) and large enough to matter
+//! ([`MIN_EFFECT`]); then α is taken from the strip's values.
+
+use super::PhaseLaw;
+use super::profile::{Profile, Strip};
+use super::sine_tone::{ToneFix, code_of};
+use crate::geometry::Homography;
+
+/// Distance of each band of paper read from the strip's long edge, px.
+pub const GAP_PX: f64 = 8.0;
+/// Depth of each band of paper read, px.
+pub const DEPTH_PX: f64 = 16.0;
+/// Equal stretches the strip is cut into along its length.
+pub const STRETCHES: usize = 32;
+/// Fewest stretches a line needs.
+pub const MIN_STRETCHES: usize = 5;
+/// The paper's light must change at least this much (brightest over
+/// darkest stretch) for α to be found.
+pub const MIN_LIGHT_SPREAD: f64 = 1.08;
+/// Largest RMS departure of the stretches from the line, as a fraction of
+/// the strip's mean value.
+pub const MAX_RESIDUAL: f64 = 0.004;
+/// α is used only beyond this many standard errors from 0.
+pub const MIN_SIGNIFICANCE: f64 = 3.0;
+/// α is used only where it is at least this fraction of the strip's mean value.
+pub const MIN_EFFECT: f64 = 0.002;
+/// Codes (0–1) at or above this are taken as clipped paper.
+const CODE_HIGH: f64 = 0.985;
+/// Paper is read only up to this far (code 0–1) below the top of the code
+/// range the strip's shape was read over.
+pub const CODE_MARGIN: f64 = 0.01;
+
+/// The black level found from the paper around a strip.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlackLevel {
+    /// The offset α of the corrected values (linear units; taken from them when used).
+    pub offset: f64,
+    /// Its standard error (linear units).
+    pub sigma: f64,
+    /// α over the strip's mean corrected value (dimensionless).
+    pub relative: f64,
+    /// Stretches in the line.
+    pub stretches: usize,
+    /// Bands of paper read (0–2).
+    pub bands: usize,
+    /// The paper's light, brightest stretch over darkest.
+    pub light_spread: f64,
+    /// RMS departure from the line over the strip's mean value.
+    pub residual: f64,
+    /// Whether it is taken from the values.
+    pub used: bool,
+    /// Why it is not used ("" when used).
+    pub why_not: &'static str,
+}
+
+impl BlackLevel {
+    /// The summary's line for it.
+    pub fn describe(&self) -> String {
+        if !self.offset.is_finite() {
+            return format!(
+                "the tone curve's black level is not found from the paper beside the strip: {}",
+                self.why_not
+            );
+        }
+        let what = if self.used {
+            "taken out".to_string()
+        } else {
+            format!("not taken out: {}", self.why_not)
+        };
+        format!(
+            "the tone curve's black level from the paper beside the strip (light {:.2}:1 over {} \
+             stretches, {} band{}): {:+.2} % of the strip's mean ({:.1} σ); {what}",
+            self.light_spread,
+            self.stretches,
+            self.bands,
+            if self.bands == 1 { "" } else { "s" },
+            100.0 * self.relative,
+            (self.offset / self.sigma.max(1e-300)).abs()
+        )
+    }
+}
+
+/// The two bands of paper beside a strip (above its t = 0 edge, below its
+/// t = width edge), as strips with the same `s`.
+pub fn bands(strip: &Strip) -> Vec<Strip> {
+    let j = strip
+        .to_image
+        .jacobian([0.5 * strip.length, 0.5 * strip.width]);
+    let px_per_t = j[0][1].hypot(j[1][1]);
+    if !(px_per_t.is_finite() && px_per_t > 0.0) {
+        return Vec::new();
+    }
+    let (gap, depth) = (GAP_PX / px_per_t, DEPTH_PX / px_per_t);
+    [-(gap + depth), strip.width + gap]
+        .into_iter()
+        .map(|t0| Strip {
+            to_image: strip.to_image.compose(&Homography {
+                m: [1.0, 0.0, 0.0, 0.0, 1.0, t0, 0.0, 0.0, 1.0],
+            }),
+            lens: strip.lens,
+            length: strip.length,
+            width: depth,
+        })
+        .collect()
+}
+
+/// A line `m = c0 + c1·s` through the stretches: α = c0/(1 − c1), its
+/// standard error, and the RMS residual.
+struct Line {
+    alpha: f64,
+    sigma: f64,
+    c1: f64,
+    rms: f64,
+}
+
+fn line(pts: &[(f64, f64)]) -> Option<Line> {
+    let k = pts.len() as f64;
+    if pts.len() < MIN_STRETCHES {
+        return None;
+    }
+    let xm = pts.iter().map(|p| p.0).sum::<f64>() / k;
+    let ym = pts.iter().map(|p| p.1).sum::<f64>() / k;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - xm).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - xm) * (p.1 - ym)).sum();
+    if !(sxx > 0.0) {
+        return None;
+    }
+    let c1 = sxy / sxx;
+    let c0 = ym - c1 * xm;
+    let rss: f64 = pts.iter().map(|p| (p.1 - c0 - c1 * p.0).powi(2)).sum();
+    let s2 = rss / (k - 2.0);
+    let (v0, v1, v01) = (s2 * (1.0 / k + xm * xm / sxx), s2 / sxx, -xm * s2 / sxx);
+    let d = 1.0 - c1;
+    if !(d.abs() > 1e-6) {
+        return None;
+    }
+    let (g0, g1) = (1.0 / d, c0 / (d * d));
+    let var = g0 * g0 * v0 + g1 * g1 * v1 + 2.0 * g0 * g1 * v01;
+    Some(Line {
+        alpha: c0 / d,
+        sigma: var.max(0.0).sqrt(),
+        c1,
+        rms: (rss / k).sqrt(),
+    })
+}
+
+/// The black level of a strip whose values `prof` a used `fix` has
+/// corrected, from its bands of paper `paper` as binned with the base tone
+/// (not corrected); None where no band or too few stretches can be read.
+pub fn find(
+    prof: &Profile,
+    paper: &[Profile],
+    law: &PhaseLaw,
+    fix: &ToneFix,
+) -> Option<BlackLevel> {
+    let (Some(&s0), Some(&s1)) = (prof.s.first(), prof.s.last()) else {
+        return None;
+    };
+    // Per stretch: the strip's mean over whole periods, and each band's mean
+    // corrected paper value (None where the band is missing or clipped).
+    let mut rows: Vec<(f64, [Option<f64>; 2])> = Vec::new();
+    for k in 0..STRETCHES {
+        let (a, b) = (
+            s0 + (s1 - s0) * k as f64 / STRETCHES as f64,
+            s0 + (s1 - s0) * (k + 1) as f64 / STRETCHES as f64,
+        );
+        // The strip's local mean at the stretch's middle: a sine at the
+        // law's phase, and the light's trend, fitted beside it (a mean over
+        // whole periods moved with the law's small phase errors: ±2 % at
+        // the low end).
+        if !(law.phase(b) - law.phase(a) >= 1.0) {
+            continue;
+        }
+        let Some(m) = local_mean(prof, law, a, b) else {
+            continue;
+        };
+        let mut band = [None, None];
+        for (slot, p) in band.iter_mut().zip(paper) {
+            let lo = p.s.partition_point(|&s| s < a);
+            let hi = p.s.partition_point(|&s| s < b);
+            // Paper brighter than the strip's range read (less a margin) is
+            // left out: there the correction is not known (a camera curve's
+            // shoulder; read 0.02 beyond, the line bent by 0.5–1 %).
+            let beyond = p.y[lo..hi]
+                .iter()
+                .any(|&y| code_of(&fix.base, y) > (fix.code_range.1 - CODE_MARGIN).min(CODE_HIGH));
+            // A band must cover the stretch (not be cut by the frame).
+            let covered = hi > lo && p.s[lo] - a < 0.1 * (b - a) && b - p.s[hi - 1] < 0.1 * (b - a);
+            if !beyond && covered {
+                *slot = mean_over(p, a, b, |y| fix.linear(y));
+            }
+        }
+        rows.push((m, band));
+    }
+    let strip_mean = rows.iter().map(|r| r.0).sum::<f64>() / rows.len().max(1) as f64;
+    // Each band alone, and both together where both are read.
+    let pts = |pick: &dyn Fn(&[Option<f64>; 2]) -> Option<f64>| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter_map(|(m, b)| pick(b).map(|s| (s, *m)))
+            .collect()
+    };
+    let each: Vec<Option<Line>> = (0..2).map(|i| line(&pts(&|b| b[i]))).collect();
+    let both = pts(&|b| match b {
+        [Some(x), Some(y)] => Some(0.5 * (x + y)),
+        [Some(x), None] | [None, Some(x)] => Some(*x),
+        _ => None,
+    });
+    let Some(all) = line(&both) else {
+        return Some(BlackLevel {
+            offset: f64::NAN,
+            sigma: f64::NAN,
+            relative: f64::NAN,
+            stretches: both.len(),
+            bands: 0,
+            light_spread: f64::NAN,
+            residual: f64::NAN,
+            used: false,
+            why_not: "too little of the paper beside the strip is within the codes the strip's shape was read over (it is brighter than the strip where the light is strongest)",
+        });
+    };
+    let bands = each.iter().filter(|l| l.is_some()).count();
+    let spread = {
+        let hi = both.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        let lo = both.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        if lo > 0.0 { hi / lo } else { f64::INFINITY }
+    };
+    let relative = all.alpha / strip_mean;
+    let residual = all.rms / strip_mean;
+    let agree = match (&each[0], &each[1]) {
+        (Some(a), Some(b)) => {
+            (a.alpha - b.alpha).abs() <= 3.0 * a.sigma.hypot(b.sigma) + 0.01 * strip_mean
+        }
+        _ => true,
+    };
+    let why_not = if !(spread >= MIN_LIGHT_SPREAD) {
+        "the light changes too little along the strip to tell it"
+    } else if !(residual <= MAX_RESIDUAL) || !(0.05..0.95).contains(&all.c1) {
+        "the paper beside the strip does not follow the strip's light (not plain paper?)"
+    } else if !agree {
+        "the paper above and below the strip disagree (not plain paper?)"
+    } else if !(all.alpha.abs() > MIN_SIGNIFICANCE * all.sigma) || !(relative.abs() > MIN_EFFECT) {
+        "too small to matter"
+    } else if !(relative.abs() < 0.5) {
+        "too large to be a black level"
+    } else {
+        ""
+    };
+    Some(BlackLevel {
+        offset: all.alpha,
+        sigma: all.sigma,
+        relative,
+        stretches: both.len(),
+        bands,
+        light_spread: spread,
+        residual,
+        used: why_not.is_empty(),
+        why_not,
+    })
+}
+
+/// A profile's local mean at the middle of [a, b): least squares of a
+/// mean, a sine and a cosine at the law's phase, each with a linear trend,
+/// weighted by the bins' samples; None when singular.
+fn local_mean(p: &Profile, law: &PhaseLaw, a: f64, b: f64) -> Option<f64> {
+    let lo = p.s.partition_point(|&s| s < a);
+    let hi = p.s.partition_point(|&s| s < b);
+    if hi < lo + 24 {
+        return None;
+    }
+    let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+    let (mut ata, mut atb) = ([[0.0; 6]; 6], [0.0; 6]);
+    for i in lo..hi {
+        let d = (p.s[i] - mid) / half;
+        let (sn, cs) = (std::f64::consts::TAU * law.phase(p.s[i])).sin_cos();
+        let x = [1.0, d, sn, cs, d * sn, d * cs];
+        let w = p.count[i];
+        for r in 0..6 {
+            atb[r] += w * x[r] * p.y[i];
+            for c in 0..6 {
+                ata[r][c] += w * x[r] * x[c];
+            }
+        }
+    }
+    let tiny = 1e-12 * ata[0][0];
+    crate::linalg::solve(ata, atb, tiny.max(1e-300)).map(|c| c[0])
+}
+
+/// The mean of `g(y)` over a profile's bins with s in [a, b); None when none.
+fn mean_over(p: &Profile, a: f64, b: f64, g: impl Fn(f64) -> f64) -> Option<f64> {
+    let lo = p.s.partition_point(|&s| s < a);
+    let hi = p.s.partition_point(|&s| s < b);
+    (hi > lo).then(|| p.y[lo..hi].iter().map(|&y| g(y)).sum::<f64>() / (hi - lo) as f64)
+}
+
+/// Takes a used black level out of a strip's corrected values.
+pub fn apply(black: &BlackLevel, prof: &mut Profile) {
+    if black.used {
+        for y in prof.y.iter_mut() {
+            *y -= black.offset;
+        }
+    }
+}
