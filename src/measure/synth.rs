@@ -69,6 +69,10 @@ pub struct Nuisances {
     /// ½ + ½·tanh(k(c − ½))/tanh(k/2), strength k (0 = none; 2 is a
     /// "standard" style's contrast). The file still reads as sRGB.
     pub picture_style: f64,
+    /// The strip printed on white paper, as charts are: the surround reads
+    /// twice the strip's mean (the strip spans 0.1–0.9 of the paper at
+    /// contrast 0.8); else the surround is the strip's mean.
+    pub paper_surround: bool,
 }
 
 /// A picture style's S-curve of strength `k` on a code (0–1); `k` = 0 leaves it.
@@ -89,6 +93,7 @@ impl Default for Nuisances {
             rgb_gains: None,
             chroma_420: false,
             picture_style: 0.0,
+            paper_surround: false,
         }
     }
 }
@@ -144,12 +149,17 @@ impl SynthShot {
     /// Renders linear values (no noise, no encoding), row-major.
     pub fn render_linear(&self) -> Vec<f64> {
         let inv = self.homography().inverse().expect("invertible");
-        let mut out = vec![self.mean; self.width * self.height];
+        let surround = if self.nuisance.paper_surround {
+            2.0 * self.mean
+        } else {
+            self.mean
+        };
+        let mut out = vec![surround; self.width * self.height];
         for y in 0..self.height {
             for x in 0..self.width {
                 let p = [x as f64 + 0.5, y as f64 + 0.5];
                 let light = self.light_at(p);
-                out[y * self.width + x] = self.mean * light;
+                out[y * self.width + x] = surround * light;
                 let q = inv.apply(p);
                 let (s, t) = (q[0], q[1]);
                 if !(0.0..=self.length).contains(&s) || !(0.0..=self.strip_width).contains(&t) {
@@ -470,6 +480,21 @@ pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
                 // A slight colour cast left after white balance.
                 rgb_gains: Some([0.95, 1.0, 0.9]),
                 chroma_420: true,
+                ..Nuisances::default()
+            },
+            ..base.clone()
+        },
+        SynthShot {
+            name: "picture_style2_light2".into(),
+            // A picture style under light falling 2:1 along the strip, with
+            // vignetting, on white paper: the curve's black level, which the
+            // shape cannot show, then bends the MTF; the paper gives it.
+            mean: 0.3,
+            nuisance: Nuisances {
+                picture_style: 2.0,
+                light_ratio: 2.0,
+                vignette_corner: 0.7,
+                paper_surround: true,
                 ..Nuisances::default()
             },
             ..base

@@ -131,6 +131,55 @@ fn a_camera_picture_style_is_found_from_the_strip_and_taken_out() {
     }
 }
 
+/// The same picture style under light falling 2:1 along the strip (and a
+/// vignette), on white paper: the curve's black level, which a sine's shape
+/// cannot show, bends the MTF where the light changes; the paper beside the
+/// strip sees the same light through the same curve and gives it.
+#[test]
+fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
+    for variant in [7u64, 12] {
+        let shot = nuisance_cases(variant)
+            .into_iter()
+            .find(|s| s.name == "picture_style2_light2")
+            .unwrap();
+        let ((rms, e50, cm, _), notes) = run_with(&shot, 200 + variant, MeasureOptions::default());
+        // The same shot with the surround at the strip's mean (no paper to read).
+        let grey = SynthShot {
+            nuisance: sweepmtf::measure::synth::Nuisances {
+                paper_surround: false,
+                ..shot.nuisance
+            },
+            ..shot.clone()
+        };
+        let ((rms0, e0, cm0, _), notes0) =
+            run_with(&grey, 200 + variant, MeasureOptions::default());
+        eprintln!(
+            "picture style + light v{variant}: no paper RMS {rms0:.4} MTF50 {e0:+.4} chart {cm0:.4}; \
+             paper RMS {rms:.4} MTF50 {e50:+.4} chart {cm:.4}"
+        );
+        assert!(rms0 > 0.008 && e0.abs() > 0.015, "{rms0} {e0}");
+        assert!(
+            !notes0
+                .iter()
+                .any(|n| n.contains("black level") && n.contains("; taken out")),
+            "{notes0:?}"
+        );
+        assert!(rms <= 0.006, "v{variant}: RMS {rms:.4}");
+        assert!(e50.abs() <= 0.01, "v{variant}: MTF50 off by {e50:+.4}");
+        // Unlike under even light, the chart modulation is found too.
+        assert!(
+            (cm / 0.8 - 1.0).abs() <= 0.005,
+            "v{variant}: chart modulation {cm:.4}"
+        );
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("black level") && n.contains("; taken out")),
+            "{notes:?}"
+        );
+    }
+}
+
 #[test]
 fn keystoned_linear_sweep_within_0_006() {
     check("keystone1.5_linear", 0.006);
