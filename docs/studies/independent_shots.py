@@ -30,8 +30,10 @@ Run: python3 docs/studies/independent_shots.py N SEED [KIND] (needs numpy,
 scipy, pillow and a release build: `cargo build --release`). KIND: jpeg75,
 jpeg85, png, sharpen, keystone, distort, light, all, tone (a camera's
 picture style: a tanh S-curve of strength 1–2.5 on the sRGB code), camera
-(all and tone). EXTRA="--tone file" passes options to `measure`;
-SHOW_TONE=1 prints the tone correction found. Prints one line per shot
+(all and tone), tonelight (tone and light: the black level from the paper,
+session 23). EXTRA="--tone file" passes options to `measure`;
+SHOW_TONE=1 prints the tone correction and its black level found; with
+KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay. Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
 the chart modulation's error (printed 0.800).
 """

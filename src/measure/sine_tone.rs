@@ -18,8 +18,9 @@
 //! before left. An affine change of the linear values (an offset, a gain)
 //! leaves every period a sine, so the shape cannot tell it: it is left out,
 //! and the chart modulation stays as the file's tone reads it; where the
-//! light changes along the strip that unseen offset also bends the MTF
-//! (warned above [`MAX_EVEN_LIGHT`]). Over windows of
+//! light changes along the strip that unseen offset also bends the MTF;
+//! there the paper beside the strip gives it ([`super::tone_black`]), and
+//! where it cannot, a light above [`MAX_EVEN_LIGHT`] is warned. Over windows of
 //! [`WINDOW_CYCLES`] cycles at the strip's low end the values must be a
 //! local mean, a sine and a cosine at the law's phase, each with a linear
 //! trend (light); β is their weighted least-squares fit with the windows'
@@ -122,7 +123,8 @@ impl ToneFix {
     }
 
     /// Whether the light changes so much along the strip that the curve's
-    /// unseen offset moves the MTF's shape (a warning when used).
+    /// unseen offset moves the MTF's shape, and the paper did not give it
+    /// (a warning when used).
     pub fn uneven_light(&self) -> bool {
         self.used
             && self.light_ratio > MAX_EVEN_LIGHT
@@ -134,8 +136,10 @@ impl ToneFix {
         format!(
             "the light changes {:.2}:1 along the strip, and with a camera tone curve taken out \
              the MTF's shape then depends on the curve's black level, which a sine's shape does \
-             not show (simulated picture styles: light 1.5–2.1:1, MTF50 off by up to ±7 %; \
-             1.03–1.11:1, ±1.1 %); light the chart evenly, or give --tone chart with grey patches",
+             not show and the paper beside the strip did not give (simulated picture styles: \
+             light 1.5–2.1:1, MTF50 off by up to ±7 %; 1.03–1.11:1, ±1.1 %); light the chart \
+             evenly (or brightest at the strip's low-frequency end, on plain paper), or give \
+             --tone chart with grey patches",
             self.light_ratio
         )
     }
@@ -143,7 +147,10 @@ impl ToneFix {
     /// The summary's line for it.
     pub fn describe(&self) -> String {
         let (lo, hi) = self.code_range;
-        let what = if self.used {
+        let black = self.black.as_ref().is_some_and(|b| b.used);
+        let what = if self.used && black {
+            "taken out, its black level from the paper beside the strip"
+        } else if self.used {
             "taken out (the chart modulation stays as the file's tone reads it: an offset or gain of the light does not change a sine's shape)"
         } else {
             "not taken out (it would put the values out of order)"
