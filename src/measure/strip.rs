@@ -295,6 +295,19 @@ pub(super) fn measure_strip(
         ]
     };
     let alias_line = points.iter().find(|p| p.aliased).map(|p| across(p.s));
+    // A black level taken from the paper scales every modulation by
+    // 1/(mean − α): its error is the chart modulation's too (the MTF, a
+    // ratio of modulations, keeps only what differs along the strip).
+    let (m_chart_err, source) = match tone_fix.as_ref().and_then(|f| f.black.as_ref()) {
+        Some(b) if b.used => {
+            let rel = b.modulation_rel_err();
+            (
+                m_chart_err.hypot(m_chart * rel),
+                format!("{source}; ± {:.4} from the black level", m_chart * rel),
+            )
+        }
+        _ => (m_chart_err, source),
+    };
     let (s_first, s_last) = (
         points.iter().map(|p| p.s).fold(f64::INFINITY, f64::min),
         points.iter().map(|p| p.s).fold(f64::NEG_INFINITY, f64::max),

@@ -77,9 +77,21 @@ pub struct BlackLevel {
     pub used: bool,
     /// Why it is not used ("" when used).
     pub why_not: &'static str,
+    /// The strip's mean corrected value before α is taken out (linear units).
+    pub mean: f64,
 }
 
 impl BlackLevel {
+    /// The relative standard error it gives every modulation, σ/(mean − α).
+    pub fn modulation_rel_err(&self) -> f64 {
+        let d = self.mean - self.offset;
+        if self.sigma.is_finite() && d > 0.0 {
+            self.sigma / d
+        } else {
+            0.0
+        }
+    }
+
     /// The summary's line for it.
     pub fn describe(&self) -> String {
         if !self.offset.is_finite() {
@@ -245,6 +257,7 @@ pub fn find(
             light_spread: f64::NAN,
             residual: f64::NAN,
             used: false,
+            mean: strip_mean,
             why_not: "too little of the paper beside the strip is within the codes the strip's shape was read over (it is brighter than the strip where the light is strongest)",
         });
     };
@@ -285,6 +298,7 @@ pub fn find(
         residual,
         used: why_not.is_empty(),
         why_not,
+        mean: strip_mean,
     })
 }
 
@@ -431,6 +445,12 @@ mod tests {
         assert!(before.abs() > 0.03, "{before}");
         assert!(after.abs() < 0.005, "{before} → {after}; {b:?}");
         assert!(!fix.uneven_light(), "found: no warning");
+        // Its error on the modulations: the offset's σ over the mean less α.
+        let e = b.modulation_rel_err();
+        assert!(
+            e > 0.0 && e < 0.01 && (e - b.sigma / (b.mean - b.offset)).abs() < 1e-15,
+            "{b:?}"
+        );
     }
 
     #[test]

@@ -69,17 +69,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                     "code_range": [f.code_range.0, f.code_range.1],
                     "windows": f.windows,
                     "light_ratio": f.light_ratio,
-                    "black_level": f.black.as_ref().map(|b| json!({
-                        "used": b.used,
-                        "offset": b.offset,
-                        "offset_err": b.sigma,
-                        "relative_to_mean": b.relative,
-                        "stretches": b.stretches,
-                        "bands": b.bands,
-                        "light_spread": b.light_spread,
-                        "residual": b.residual,
-                        "why_not": b.why_not,
-                    })),
+                    "black_level": f.black.as_ref().map(black_level_json),
                 })),
                 "sweep_law": {
                     "kind": c.law.kind,
@@ -173,4 +163,21 @@ pub fn summary_json(m: &Measurement, t: Option<Timings>) -> Vec<u8> {
     let mut s = serde_json::to_string_pretty(&summary(m, t)).unwrap_or_default();
     s.push('\n');
     s.into_bytes()
+}
+
+/// A tone correction's black level from the paper, as the summary JSON gives it.
+fn black_level_json(b: &crate::measure::tone_black::BlackLevel) -> serde_json::Value {
+    json!({
+        "used": b.used,
+        "offset": b.offset,
+        "offset_err": b.sigma,
+        "relative_to_mean": b.relative,
+        "strip_mean": b.mean,
+        "chart_modulation_rel_err": b.used.then(|| b.modulation_rel_err()),
+        "stretches": b.stretches,
+        "bands": b.bands,
+        "light_spread": b.light_spread,
+        "residual": b.residual,
+        "why_not": b.why_not,
+    })
 }

@@ -142,7 +142,8 @@ fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
             .into_iter()
             .find(|s| s.name == "picture_style2_light2")
             .unwrap();
-        let ((rms, e50, cm, _), notes) = run_with(&shot, 200 + variant, MeasureOptions::default());
+        let ((rms, e50, cm, cm_err), notes) =
+            run_with(&shot, 200 + variant, MeasureOptions::default());
         // The same shot with the surround at the strip's mean (no paper to read).
         let grey = SynthShot {
             nuisance: sweepmtf::measure::synth::Nuisances {
@@ -155,7 +156,7 @@ fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
             run_with(&grey, 200 + variant, MeasureOptions::default());
         eprintln!(
             "picture style + light v{variant}: no paper RMS {rms0:.4} MTF50 {e0:+.4} chart {cm0:.4}; \
-             paper RMS {rms:.4} MTF50 {e50:+.4} chart {cm:.4}"
+             paper RMS {rms:.4} MTF50 {e50:+.4} chart {cm:.4} ± {cm_err:.4}"
         );
         assert!(rms0 > 0.008 && e0.abs() > 0.015, "{rms0} {e0}");
         assert!(
@@ -170,6 +171,11 @@ fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
         assert!(
             (cm / 0.8 - 1.0).abs() <= 0.005,
             "v{variant}: chart modulation {cm:.4}"
+        );
+        // Its uncertainty carries the black level's, and covers the error.
+        assert!(
+            (cm - 0.8).abs() <= 3.0 * cm_err && cm_err < 0.01,
+            "v{variant}: chart modulation {cm:.4} ± {cm_err:.4}"
         );
         assert!(
             notes
