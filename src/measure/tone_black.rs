@@ -473,6 +473,34 @@ mod tests {
     }
 
     #[test]
+    fn no_paper_or_no_strip_ends_cleanly() {
+        let light = |s: f64| 0.75 * (1.0 - 0.45 * s / LEN);
+        let (prof, fix) = run(&light, &|_| 1.0);
+        let law = PhaseLaw {
+            kind: LawKind::Log,
+            c0: 0.0,
+            c1: 0.008,
+            c2: (0.3f64 / 0.008).ln() / LEN,
+        };
+        // Bands outside the frame bin nothing.
+        let empty = [Profile::default(), Profile::default()];
+        let b = find(&prof, &empty, &law, &fix).expect("read");
+        assert!(
+            !b.used && !b.offset.is_finite() && b.modulation_rel_err() == 0.0,
+            "{b:?}"
+        );
+        assert!(find(&Profile::default(), &empty, &law, &fix).is_none());
+        // A degenerate strip has no bands.
+        let flat = Strip {
+            to_image: Homography { m: [0.0; 9] },
+            lens: None,
+            length: 1.0,
+            width: 1.0,
+        };
+        assert!(bands(&flat).is_empty());
+    }
+
+    #[test]
     fn a_surround_that_is_not_plain_paper_is_refused() {
         let light = |s: f64| 0.75 * (1.0 - 0.45 * s / LEN);
         // Grey labels every 150 px in the bands.
