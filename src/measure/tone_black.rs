@@ -10,15 +10,20 @@
 //! with light 1.5–2.1:1: MTF50 off by up to ±5 %).
 //!
 //! The paper around the strip sees the same light through the same curve:
-//! beside stretch k, `s_k = α + β·W·L_k`, while the strip's mean over whole
-//! periods (whatever the MTF) is `m_k = α + β·M·L_k`. So `m = c0 + c1·s`
+//! beside stretch k, `s_k = α + β·W·L_k`, while the strip's local mean (a
+//! mean, a sine and a cosine at the law's phase and their trends, fitted
+//! over the stretch: whatever the MTF) is `m_k = α + β·M·L_k`. So `m = c0 + c1·s`
 //! with `c1 = M/W` and `c0 = α(1 − c1)`: where the light changes, a line
 //! through the stretches gives α. A light that is a product of a profile
 //! along the strip and one across it (a gradient, most of a vignette) only
 //! scales `s` and leaves α. Two bands are read, [`GAP_PX`] beyond each long
-//! edge and [`DEPTH_PX`] deep; each gives α alone, and they must agree
-//! (another strip, a label or the card's edge in a band shows as a
-//! disagreement or a poor line). Used only where the light changes enough
+//! edge and [`DEPTH_PX`] deep, and their mean is used (a light falling
+//! across the strip cancels in it); each gives α alone too, and they must
+//! agree within [`MAX_BAND_GAP`] (another strip, a label or the card's edge
+//! in a band shows as a disagreement or a poor line). Paper brighter than
+//! the codes the strip's shape was read over is left out (the correction is
+//! not known there): where the light is strongest away from the strip's
+//! low-frequency end, too little paper is left and α is not found. Used only where the light changes enough
 //! ([`MIN_LIGHT_SPREAD`]), the line holds ([`MAX_RESIDUAL`]), α is
 //! significant ([`MIN_SIGNIFICANCE`]) and large enough to matter
 //! ([`MIN_EFFECT`]); then α is taken from the strip's values.
@@ -194,8 +199,8 @@ pub fn find(
     let (Some(&s0), Some(&s1)) = (prof.s.first(), prof.s.last()) else {
         return None;
     };
-    // Per stretch: the strip's mean over whole periods, and each band's mean
-    // corrected paper value (None where the band is missing or clipped).
+    // Per stretch: the strip's local mean, and each band's mean corrected
+    // paper value (None where the band is missing, cut or too bright).
     let mut rows: Vec<(f64, [Option<f64>; 2])> = Vec::new();
     for k in 0..STRETCHES {
         let (a, b) = (
@@ -258,7 +263,7 @@ pub fn find(
             residual: f64::NAN,
             used: false,
             mean: strip_mean,
-            why_not: "too little of the paper beside the strip is within the codes the strip's shape was read over (it is brighter than the strip where the light is strongest)",
+            why_not: "too little of the paper beside the strip can be read: outside the frame, or brighter than every code the strip's shape was read over (where the light is strongest away from the strip's low-frequency end)",
         });
     };
     let bands = each.iter().filter(|l| l.is_some()).count();
