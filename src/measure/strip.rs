@@ -163,10 +163,9 @@ pub(super) fn measure_strip(
         )));
     }
     // A camera's own tone curve, found from the low end's shape and taken out.
-    let tone_fix = coding
+    let mut tone_fix = coding
         .tone
         .and_then(|t| sine_tone::fit(&prof, &law, &s_per_px, t));
-    let mut tone_fix = tone_fix;
     if let Some(f) = &mut tone_fix
         && f.used
     {
