@@ -56,11 +56,11 @@ pub const MIN_EFFECT: f64 = 0.001;
 /// within ±1.1 %; 1.5–2.1 up to 0.076 and ±6.8 %.)
 pub const MAX_EVEN_LIGHT: f64 = 1.2;
 /// Codes (0–1) at or above this are taken as clipped: their window is left out.
-const CODE_HIGH: f64 = 0.985;
+pub(super) const CODE_HIGH: f64 = 0.985;
 /// Codes (0–1) at or below this are taken as clipped black.
 const CODE_LOW: f64 = 0.01;
 /// Window parameters: mean, its slope, sine, cosine and their slopes.
-const NX: usize = 6;
+pub(super) const NX: usize = 6;
 /// Functions the correction is made of: 1, v and D'(c)·uᵏ.
 const NF: usize = TERMS + 2;
 
@@ -262,22 +262,18 @@ fn windows(
                 break;
             }
             let (mid, half) = (0.5 * (sa + sb), 0.5 * (sb - sa));
-            let lo = prof.s.partition_point(|&s| s < sa);
-            let hi = prof.s.partition_point(|&s| s < sb);
-            let mut rows = Vec::with_capacity(hi - lo);
+            let bins = prof.bins_within(sa, sb);
+            let mut rows = Vec::with_capacity(bins.len());
             let mut clipped = false;
-            for i in lo..hi {
+            for i in bins {
                 let (v, c) = (prof.y[i], code_of(base, prof.y[i]));
                 clipped |= !(CODE_LOW..CODE_HIGH).contains(&c);
-                let ph = std::f64::consts::TAU * law.phase(prof.s[i]);
-                let d = (prof.s[i] - mid) / half;
-                let (sn, cs) = ph.sin_cos();
                 rows.push(Row {
                     c,
                     v,
                     n: prof.count[i],
                     w: prof.count[i] / slope(base, c).powi(2).max(1e-300),
-                    x: [1.0, d, sn, cs, d * sn, d * cs],
+                    x: window_row(law, prof.s[i], mid, half),
                 });
             }
             if !clipped && rows.len() >= 4 * NX {
@@ -292,6 +288,15 @@ fn windows(
     } else {
         read(MAX_FREQ_STRETCH_CY_PX)
     }
+}
+
+/// A window's design row at `s` (window middle `mid`, half-width `half`):
+/// a mean, a sine and a cosine at the law's phase, and each times the
+/// position d ∈ [−1, 1] (the light's trend).
+pub(super) fn window_row(law: &PhaseLaw, s: f64, mid: f64, half: f64) -> [f64; NX] {
+    let d = (s - mid) / half;
+    let (sn, cs) = (std::f64::consts::TAU * law.phase(s)).sin_cos();
+    [1.0, d, sn, cs, d * sn, d * cs]
 }
 
 /// The correction's directions: the functions D'(c)·uᵏ made orthonormal to
@@ -575,9 +580,7 @@ fn light_ratio(prof: &Profile, law: &PhaseLaw, g: &dyn Fn(f64) -> f64) -> f64 {
                 return None;
             }
             let (sa, sb) = (law.s_at_phase(pa, s0, s1), law.s_at_phase(pb, s0, s1));
-            let lo = prof.s.partition_point(|&s| s < sa);
-            let hi = prof.s.partition_point(|&s| s < sb);
-            (hi > lo).then(|| prof.y[lo..hi].iter().map(|&y| g(y)).sum::<f64>() / (hi - lo) as f64)
+            prof.mean_within(sa, sb, g)
         })
         .collect();
     let hi = means.iter().cloned().fold(f64::NEG_INFINITY, f64::max);

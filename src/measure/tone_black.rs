@@ -30,7 +30,7 @@
 
 use super::PhaseLaw;
 use super::profile::{Profile, Strip};
-use super::sine_tone::{ToneFix, code_of};
+use super::sine_tone::{CODE_HIGH, NX, ToneFix, code_of, window_row};
 use crate::geometry::Homography;
 
 /// Distance of each band of paper read from the strip's long edge, px.
@@ -55,8 +55,6 @@ pub const MAX_BAND_GAP: f64 = 0.15;
 pub const MIN_SIGNIFICANCE: f64 = 3.0;
 /// α is used only where it is at least this fraction of the strip's mean value.
 pub const MIN_EFFECT: f64 = 0.002;
-/// Codes (0–1) at or above this are taken as clipped paper.
-const CODE_HIGH: f64 = 0.985;
 /// Paper is read only up to this far (code 0–1) below the top of the code
 /// range the strip's shape was read over.
 pub const CODE_MARGIN: f64 = 0.01;
@@ -219,18 +217,19 @@ pub fn find(
         };
         let mut band = [None, None];
         for (slot, p) in band.iter_mut().zip(paper) {
-            let lo = p.s.partition_point(|&s| s < a);
-            let hi = p.s.partition_point(|&s| s < b);
+            let bins = p.bins_within(a, b);
             // Paper brighter than the strip's range read (less a margin) is
             // left out: there the correction is not known (a camera curve's
             // shoulder; read 0.02 beyond, the line bent by 0.5–1 %).
-            let beyond = p.y[lo..hi]
+            let beyond = p.y[bins.clone()]
                 .iter()
                 .any(|&y| code_of(&fix.base, y) > (fix.code_range.1 - CODE_MARGIN).min(CODE_HIGH));
             // A band must cover the stretch (not be cut by the frame).
-            let covered = hi > lo && p.s[lo] - a < 0.1 * (b - a) && b - p.s[hi - 1] < 0.1 * (b - a);
+            let covered = !bins.is_empty()
+                && p.s[bins.start] - a < 0.1 * (b - a)
+                && b - p.s[bins.end - 1] < 0.1 * (b - a);
             if !beyond && covered {
-                *slot = mean_over(p, a, b, |y| fix.linear(y));
+                *slot = p.mean_within(a, b, |y| fix.linear(y));
             }
         }
         rows.push((m, band));
@@ -311,34 +310,24 @@ pub fn find(
 /// mean, a sine and a cosine at the law's phase, each with a linear trend,
 /// weighted by the bins' samples; None when singular.
 fn local_mean(p: &Profile, law: &PhaseLaw, a: f64, b: f64) -> Option<f64> {
-    let lo = p.s.partition_point(|&s| s < a);
-    let hi = p.s.partition_point(|&s| s < b);
-    if hi < lo + 24 {
+    let bins = p.bins_within(a, b);
+    if bins.len() < 24 {
         return None;
     }
     let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
-    let (mut ata, mut atb) = ([[0.0; 6]; 6], [0.0; 6]);
-    for i in lo..hi {
-        let d = (p.s[i] - mid) / half;
-        let (sn, cs) = (std::f64::consts::TAU * law.phase(p.s[i])).sin_cos();
-        let x = [1.0, d, sn, cs, d * sn, d * cs];
+    let (mut ata, mut atb) = ([[0.0; NX]; NX], [0.0; NX]);
+    for i in bins {
+        let x = window_row(law, p.s[i], mid, half);
         let w = p.count[i];
-        for r in 0..6 {
+        for r in 0..NX {
             atb[r] += w * x[r] * p.y[i];
-            for c in 0..6 {
+            for c in 0..NX {
                 ata[r][c] += w * x[r] * x[c];
             }
         }
     }
     let tiny = 1e-12 * ata[0][0];
     crate::linalg::solve(ata, atb, tiny.max(1e-300)).map(|c| c[0])
-}
-
-/// The mean of `g(y)` over a profile's bins with s in [a, b); None when none.
-fn mean_over(p: &Profile, a: f64, b: f64, g: impl Fn(f64) -> f64) -> Option<f64> {
-    let lo = p.s.partition_point(|&s| s < a);
-    let hi = p.s.partition_point(|&s| s < b);
-    (hi > lo).then(|| p.y[lo..hi].iter().map(|&y| g(y)).sum::<f64>() / (hi - lo) as f64)
 }
 
 /// Takes a used black level out of a strip's corrected values.

@@ -12,6 +12,14 @@ use sweepmtf::measure::synth::{SynthShot, nuisance_cases};
 use sweepmtf::measure::{MeasureOptions, measure_bytes, measure_decoded};
 use sweepmtf::photo::decode::decode_bytes;
 
+/// The reference renderer's nuisance shot `name` in geometry `variant`.
+fn case(name: &str, variant: u64) -> SynthShot {
+    nuisance_cases(variant)
+        .into_iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no nuisance case {name}"))
+}
+
 /// (RMS over 0.01–0.45 cy/px, MTF50 relative error, chart modulation found, its claimed σ).
 /// Measured from the file's bytes as `sweepmtf measure` reads them (a JPEG's
 /// luminance from its Y′ plane alone).
@@ -69,10 +77,7 @@ fn run_with(
 
 fn check(name: &str, bar: f64) {
     for variant in [7u64, 12] {
-        let shot = nuisance_cases(variant)
-            .into_iter()
-            .find(|s| s.name == name)
-            .unwrap();
+        let shot = case(name, variant);
         let (rms, e50, cm, cm_err) = run(&shot, 100 + variant);
         eprintln!("{name} v{variant}: RMS {rms:.4} MTF50 {e50:+.4} chart {cm:.4} ± {cm_err:.4}");
         assert!(rms <= bar, "{name} v{variant}: RMS {rms:.4} > {bar}");
@@ -105,10 +110,7 @@ fn illumination_3_to_1_with_50_percent_vignetting_within_0_008() {
 #[test]
 fn a_camera_picture_style_is_found_from_the_strip_and_taken_out() {
     for variant in [7u64, 12] {
-        let shot = nuisance_cases(variant)
-            .into_iter()
-            .find(|s| s.name == "picture_style2")
-            .unwrap();
+        let shot = case("picture_style2", variant);
         let file_only = MeasureOptions {
             tone_from_strip: false,
             ..MeasureOptions::default()
@@ -138,10 +140,7 @@ fn a_camera_picture_style_is_found_from_the_strip_and_taken_out() {
 #[test]
 fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
     for variant in [7u64, 12] {
-        let shot = nuisance_cases(variant)
-            .into_iter()
-            .find(|s| s.name == "picture_style2_light2")
-            .unwrap();
+        let shot = case("picture_style2_light2", variant);
         let ((rms, e50, cm, cm_err), notes) =
             run_with(&shot, 200 + variant, MeasureOptions::default());
         // The same shot with the surround at the strip's mean (no paper to read).
@@ -196,10 +195,7 @@ fn unsharp_mask_peaking_near_1_15_within_0_01_and_never_clipped() {
     check("usm_peak1.15", 0.01);
     // Sharpening is measured, not clipped or normalised away: the curve peaks above 1
     // where the truth does.
-    let shot = nuisance_cases(7)
-        .into_iter()
-        .find(|s| s.name == "usm_peak1.15")
-        .unwrap();
+    let shot = case("usm_peak1.15", 7);
     let peak_truth = (1..500)
         .map(|i| shot.truth(i as f64 * 0.001))
         .fold(0.0, f64::max);
@@ -227,10 +223,7 @@ fn unsharp_mask_peaking_near_1_15_within_0_01_and_never_clipped() {
 fn rgb_jpeg_q75_420_with_noise_within_0_012() {
     check("rgb_jpeg75_420", 0.012);
     // The coarse table is read from the file and said: its quantisation is part of this MTF.
-    let shot = nuisance_cases(7)
-        .into_iter()
-        .find(|s| s.name == "rgb_jpeg75_420")
-        .unwrap();
+    let shot = case("rgb_jpeg75_420", 7);
     let dec = decode_bytes(&shot.encode(1), "q75.jpg").unwrap();
     let opts = MeasureOptions {
         roi: Some(shot.quad),

@@ -133,6 +133,19 @@ pub struct Profile {
 }
 
 impl Profile {
+    /// The indices of the bins whose `s` lies in [a, b) (strip units).
+    pub fn bins_within(&self, a: f64, b: f64) -> std::ops::Range<usize> {
+        let lo = self.s.partition_point(|&s| s < a);
+        lo..self.s.partition_point(|&s| s < b).max(lo)
+    }
+
+    /// The mean of `g(value)` over the bins with `s` in [a, b); None when none.
+    pub fn mean_within(&self, a: f64, b: f64, g: impl Fn(f64) -> f64) -> Option<f64> {
+        let r = self.bins_within(a, b);
+        (!r.is_empty())
+            .then(|| self.y[r.clone()].iter().map(|&y| g(y)).sum::<f64>() / r.len() as f64)
+    }
+
     /// Fraction of the region's samples that are clipped (white or black).
     pub fn clipped_fraction(&self) -> f64 {
         if self.samples == 0 {
