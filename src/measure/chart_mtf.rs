@@ -449,6 +449,7 @@ mod tests {
             outline_px: Vec::new(),
             alias_line_px: None,
             measured_lines_px: [[[0.0; 2]; 2]; 2],
+            paper_bands_px: Vec::new(),
             tone_fix: None,
         }
     }

@@ -35,6 +35,7 @@ pub mod profile;
 pub mod sine_tone;
 pub mod synth;
 pub mod tone_black;
+pub mod tone_unseen;
 
 mod frame;
 mod frequency;

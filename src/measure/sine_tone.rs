@@ -137,7 +137,8 @@ impl ToneFix {
             "the light changes {:.2}:1 along the strip, and with a camera tone curve taken out \
              the MTF's shape then depends on the curve's black level, which a sine's shape does \
              not show and the paper beside the strip did not give (simulated picture styles: \
-             light 1.5–2.1:1, MTF50 off by up to ±7 %; 1.03–1.11:1, ±1.1 %); light the chart \
+             light 1.5–2.1:1, MTF50 off by up to ±7 %; 1.03–1.11:1, ±1.1 %; each point's \
+             uncertainty carries it, see the chart modulation's); light the chart \
              evenly (or brightest at the strip's low-frequency end, on plain paper), or give \
              --tone chart with grey patches",
             self.light_ratio

@@ -12,7 +12,7 @@ use super::frequency::{
 };
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
-use super::{curve, law_guess, normalise, sine_tone, tone_black};
+use super::{curve, law_guess, normalise, sine_tone, tone_black, tone_unseen};
 use crate::geometry::Point;
 use crate::photo::PlaneRef;
 use crate::photo::linearise::Tone;
@@ -163,6 +163,7 @@ pub(super) fn measure_strip(
         )));
     }
     // A camera's own tone curve, found from the low end's shape and taken out.
+    let mut paper_bands_px = Vec::new();
     let mut tone_fix = coding
         .tone
         .and_then(|t| sine_tone::fit(&prof, &law, &s_per_px, t));
@@ -171,7 +172,9 @@ pub(super) fn measure_strip(
     {
         sine_tone::apply(f, &mut prof);
         // Its black level, from the paper beside the strip where the light changes.
-        let paper: Vec<_> = tone_black::bands(strip)
+        let bands = tone_black::bands(strip);
+        paper_bands_px = bands.iter().map(outline).collect();
+        let paper: Vec<_> = bands
             .iter()
             .map(|b| {
                 let o = BinOptions {
@@ -305,7 +308,22 @@ pub(super) fn measure_strip(
                 format!("{source}; ± {:.4} from the black level", m_chart * rel),
             )
         }
-        _ => (m_chart_err, source),
+        _ => match tone_fix.as_ref().and_then(tone_unseen::scale) {
+            // Unseen, it leaves the chart modulation and, where the light
+            // changes, each point uncertain: said, not hidden.
+            Some(eps) => {
+                let share = tone_unseen::widen(&mut points, &prof, &law, eps, m_chart, |alt| {
+                    normalise::chart_modulation(alt, s_min, contrast, channel, id)
+                        .ok()
+                        .map(|c| c.0)
+                });
+                (
+                    m_chart_err.hypot(share),
+                    format!("{source}{}", tone_unseen::source_note(share, eps)),
+                )
+            }
+            None => (m_chart_err, source),
+        },
     };
     let (s_first, s_last) = (
         points.iter().map(|p| p.s).fold(f64::INFINITY, f64::min),
@@ -333,6 +351,7 @@ pub(super) fn measure_strip(
             ),
             None => Vec::new(),
         },
+        paper_bands_px,
         alias_line_px: alias_line,
         measured_lines_px: [across(s_first), across(s_last)],
         tone_fix,
@@ -341,6 +360,15 @@ pub(super) fn measure_strip(
 
 /// Below this drift (px) across the measured width, a curve's bars lie square to the pixel grid.
 pub const SQUARE_DRIFT_PX: f64 = 0.1;
+
+/// A strip's whole outline in the photo (px, closed polyline): its long edges
+/// bent where a lens model bends them.
+fn outline(strip: &Strip) -> Vec<Point> {
+    match strip.lens {
+        Some(_) => super::profile::photo_outline(strip, 0.0, strip.width),
+        None => strip.image_quad(0.0, strip.width).to_vec(),
+    }
+}
 
 /// How far (px) the bars drift off the nearer pixel axis across the
 /// measured width: the larger of the two measured end lines' offsets.

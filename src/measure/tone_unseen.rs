@@ -1,0 +1,237 @@
+//! What a camera tone curve's black level, where it stays unseen, leaves
+//! uncertain: stated in the chart modulation's and each point's uncertainty
+//! instead of a confident number.
+//!
+//! [`super::sine_tone`] makes a strip's values affine in light,
+//! `v' = α + β·ℓ`; where [`super::tone_black`] cannot find α from the paper,
+//! every modulation read is `m/(1 + ε)` with `ε = α/(μ − α)` (μ the strip's
+//! local mean value). The chart modulation is then off by `ε` at the strip's
+//! low end, and the MTF (a ratio) by `ε_ref·(1 − μ_ref/μ(s))`: nothing under
+//! even light, up to ±7 % at MTF50 where the light changes 2:1.
+//!
+//! The sine's shape does not show α, but the curve's strength does bound it:
+//! a curve that bends a sine's shape more leaves a larger offset when its
+//! shape alone is taken out (a curve through black, `g(0) = 0`, with
+//! curvature `g''` leaves `α ≈ −g''·μ²/2`, and its effect on a sine's
+//! modulation grows with `g''·μ` too). On the independent camera's picture
+//! styles (tanh S-curves of strength 1–2.5 on the sRGB code, 29 shots, light
+//! even and 1.5–2.1:1) |ε| was 2.4–4.3 × the correction's effect on an MTF
+//! of 0.5 ([`super::sine_tone::ToneFix::effect`]); the scale stated here is
+//! [`PER_EFFECT`] × that effect, taken as a one-sigma uncertainty of ε.
+
+use super::PhaseLaw;
+use super::curve::MtfPoint;
+use super::profile::Profile;
+use super::sine_tone::ToneFix;
+
+/// The unseen black level's relative scale (of the strip's mean value less
+/// black) per unit of the correction's effect on an MTF of 0.5.
+pub const PER_EFFECT: f64 = 4.0;
+
+/// The relative scale of an unseen black level, `PER_EFFECT·|effect|`
+/// (dimensionless; None where no correction is used or its black level was
+/// found and taken out).
+pub fn scale(fix: &ToneFix) -> Option<f64> {
+    (fix.used && !fix.black.as_ref().is_some_and(|b| b.used))
+        .then(|| PER_EFFECT * fix.effect.abs())
+        .filter(|e| e.is_finite() && *e > 0.0)
+}
+
+/// Adds an unseen black level of relative scale `eps` (of the strip's mean
+/// value) to each point's uncertainty and returns the chart modulation's
+/// share, to first order in `eps` (a one-sigma share either way): the
+/// modulations are re-read as they would be were an offset `eps·μ̄` taken
+/// out (each scaled by `1 + eps·μ̄/μ(s)`, μ the strip's local
+/// mean value over a period, at least [`MEAN_SPAN`] of the strip, μ̄ its
+/// mean), the chart modulation taken again from them by `chart_modulation`
+/// (the extrapolation follows how the offset changes along the low end),
+/// and each MTF's change is its share. Nothing is widened where the chart
+/// modulation cannot be taken again.
+pub(super) fn widen(
+    points: &mut [MtfPoint],
+    prof: &Profile,
+    law: &PhaseLaw,
+    eps: f64,
+    m_chart: f64,
+    chart_modulation: impl Fn(&[MtfPoint]) -> Option<f64>,
+) -> f64 {
+    let n = prof.y.len();
+    if n == 0 || !(m_chart > 0.0) {
+        return 0.0;
+    }
+    let (s0, s1) = (prof.s[0], prof.s[n - 1]);
+    let mean = prof.y.iter().sum::<f64>() / n as f64;
+    let mean_at = |s: f64| -> Option<f64> {
+        let f = law.freq(s);
+        let w = if f > 0.0 { 1.0 / f } else { 0.0 }.max(MEAN_SPAN * (s1 - s0));
+        prof.mean_within(s - 0.5 * w, s + 0.5 * w, |y| y)
+            .filter(|m| m.is_finite() && *m > 0.0)
+    };
+    if !(mean > 0.0) {
+        return 0.0;
+    }
+    let scale: Vec<f64> = points
+        .iter()
+        .map(|p| 1.0 + eps * mean / mean_at(p.s).unwrap_or(mean))
+        .collect();
+    let alt: Vec<MtfPoint> = points
+        .iter()
+        .zip(&scale)
+        .map(|(p, k)| MtfPoint {
+            modulation: p.modulation * k,
+            ..*p
+        })
+        .collect();
+    let Some(m_alt) = chart_modulation(&alt).filter(|m| m.is_finite() && *m > 0.0) else {
+        return 0.0;
+    };
+    for (p, k) in points.iter_mut().zip(&scale) {
+        let d = p.mtf * (k * m_chart / m_alt - 1.0);
+        if d.is_finite() {
+            p.mtf_err = p.mtf_err.hypot(d);
+        }
+    }
+    (m_alt - m_chart).abs()
+}
+
+/// The shortest stretch a local mean is taken over, as a fraction of the strip.
+pub const MEAN_SPAN: f64 = 0.02;
+
+/// The chart modulation source's clause for the share `err` an unseen black
+/// level of relative scale `eps` leaves it.
+pub fn source_note(err: f64, eps: f64) -> String {
+    format!(
+        "; ± {err:.4} from the tone curve's black level, unseen (± {:.1} % of the strip's mean: \
+         {PER_EFFECT:.0} × the curve's effect on an MTF of 0.5)",
+        100.0 * eps
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn profile(s: Vec<f64>, y: Vec<f64>) -> Profile {
+        let n = s.len();
+        Profile {
+            count: vec![60.0; n],
+            var_s: vec![0.0; n],
+            length: s.last().copied().unwrap_or(0.0),
+            s,
+            y,
+            bin: 1.0,
+            samples: 60 * n,
+            clipped_high: 0,
+            clipped_low: 0,
+        }
+    }
+
+    fn linear_law(f0: f64, slope: f64) -> PhaseLaw {
+        PhaseLaw {
+            kind: super::super::law::LawKind::Linear,
+            c0: 0.0,
+            c1: f0,
+            c2: 0.5 * slope,
+        }
+    }
+
+    fn point(s: f64, mtf: f64) -> MtfPoint {
+        MtfPoint {
+            s,
+            freq_cy_px: 0.01 + s / 1000.0,
+            freq_chart: 0.01 + s / 1000.0,
+            modulation: 0.8 * mtf,
+            mtf,
+            mtf_err: 0.001,
+            aliased: false,
+        }
+    }
+
+    /// The chart modulation "extrapolated" by a line through the two lowest points.
+    fn two_point(pts: &[MtfPoint]) -> Option<f64> {
+        let (a, b) = (pts.first()?, pts.get(1)?);
+        Some(a.modulation - a.s * (b.modulation - a.modulation) / (b.s - a.s))
+    }
+
+    /// The stated widening matches the bias an offset α really leaves, worked
+    /// out by hand: the modulation read is `m·(μ − α)/μ`.
+    #[test]
+    fn the_widening_is_the_bias_an_offset_leaves_under_changing_light() {
+        // Light rising 1 → 2 along a 1000 px strip; the values' local mean is the light.
+        let s: Vec<f64> = (0..1000).map(|i| i as f64 + 0.5).collect();
+        let light = |s: f64| 1.0 + s / 1000.0;
+        let prof = profile(s.clone(), s.iter().map(|&s| light(s)).collect());
+        let law = linear_law(0.01, 0.3 / 1000.0);
+        let mean = 1.5;
+        let eps = 0.04;
+        let alpha = eps * mean;
+        let mtf = |s: f64| 1.0 - (s / 1200.0).powi(2);
+        let mut pts: Vec<MtfPoint> = (1..20)
+            .map(|i| {
+                let s = 50.0 * i as f64;
+                let mut p = point(s, 0.0);
+                p.modulation = 0.8 * mtf(s) * (light(s) - alpha) / light(s);
+                p
+            })
+            .collect();
+        let m_chart = two_point(&pts).unwrap();
+        pts.iter_mut().for_each(|p| p.mtf = p.modulation / m_chart);
+        // Without α: the same extrapolation of the true modulations.
+        let truth: Vec<MtfPoint> = pts
+            .iter()
+            .map(|p| MtfPoint {
+                modulation: 0.8 * mtf(p.s),
+                ..*p
+            })
+            .collect();
+        let m_true = two_point(&truth).unwrap();
+        let before: Vec<f64> = pts.iter().map(|p| p.mtf_err).collect();
+        let cm_share = widen(&mut pts, &prof, &law, eps, m_chart, two_point);
+        let cm_bias = (m_true - m_chart).abs();
+        assert!(
+            (cm_share - cm_bias).abs() < 0.1 * cm_bias,
+            "{cm_share} against {cm_bias}"
+        );
+        for ((p, t), e0) in pts.iter().zip(&truth).zip(before) {
+            let bias = (p.mtf - t.modulation / m_true).abs();
+            let share = (p.mtf_err.powi(2) - e0 * e0).max(0.0).sqrt();
+            assert!(
+                (share - bias).abs() < 0.1 * bias + 1e-4,
+                "at s {}: widened by {share:.5} against the bias {bias:.5}",
+                p.s
+            );
+        }
+        // The light doubles, so the high end's bias is real, not rounding.
+        assert!((pts[18].mtf - truth[18].modulation / m_true).abs() > 0.005);
+    }
+
+    #[test]
+    fn even_light_widens_only_the_chart_modulation_and_degenerate_input_is_safe() {
+        let s: Vec<f64> = (0..200).map(|i| i as f64).collect();
+        let prof = profile(s, vec![0.5; 200]);
+        let law = linear_law(0.02, 0.001);
+        let mut pts = vec![point(10.0, 1.0), point(150.0, 0.3)];
+        let m_chart = two_point(&pts).unwrap();
+        let share = widen(&mut pts, &prof, &law, 0.2, m_chart, two_point);
+        // Even light: every modulation scaled by 1 + 0.2 (first order).
+        assert!((share - m_chart * 0.2).abs() < 1e-9, "{share}");
+        assert!(pts.iter().all(|p| (p.mtf_err - 0.001).abs() < 1e-9));
+        // No profile, no chart modulation, a dark profile: left as they are.
+        let dark = profile((0..10).map(f64::from).collect(), vec![0.0; 10]);
+        assert_eq!(widen(&mut pts, &dark, &law, 0.2, 0.8, two_point), 0.0);
+        assert_eq!(
+            widen(
+                &mut pts,
+                &profile(vec![], vec![]),
+                &law,
+                0.2,
+                0.8,
+                two_point
+            ),
+            0.0
+        );
+        assert_eq!(widen(&mut pts, &prof, &law, 0.2, 0.8, |_| None), 0.0);
+        assert_eq!(widen(&mut pts, &prof, &law, 0.2, f64::NAN, two_point), 0.0);
+        assert!(pts.iter().all(|p| (p.mtf_err - 0.001).abs() < 1e-9));
+    }
+}
