@@ -171,6 +171,13 @@ def test_a_camera_tone_curve_is_taken_out_unless_tone_file():
     fixed = sweepmtf.measure(img, roi=STRIP_ROI, refine_roi=False)
     found = fixed.summary["curves"][0]["tone_correction"]
     assert found["used"] and found["significance"] > 5, found
+    # No paper beside this strip: the curve's black level stays unseen, and
+    # the chart modulation's uncertainty carries it (printed 0.8).
+    assert found["black_level"] is None or not found["black_level"]["used"], found
+    assert found["unseen_black_relative"] > 0, found
+    cm = fixed.summary["curves"][0]["chart_modulation"]
+    cm_err = fixed.summary["curves"][0]["chart_modulation_err"]
+    assert abs(cm - 0.8) <= 2 * cm_err, (cm, cm_err)
     assert any("not sine-shaped" in n for n in fixed.notes), fixed.notes
     kept = sweepmtf.measure(img, roi=STRIP_ROI, refine_roi=False, tone="file")
     assert kept.summary["curves"][0]["tone_correction"] is None

@@ -109,8 +109,9 @@ pub struct Curve {
     pub outline_px: Vec<Point>,
     /// The bands of paper read for a tone curve's black level
     /// ([`super::tone_black`]), each a closed outline in the photo (px);
-    /// empty where none were read. Drawn in the region picture; not in the summary.
-    #[serde(skip)]
+    /// empty where none were read. Drawn in the region picture and the GUI;
+    /// not in the summary.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub paper_bands_px: Vec<Vec<Point>>,
     /// Image segment across the strip where aliasing starts.
     pub alias_line_px: Option<[Point; 2]>,

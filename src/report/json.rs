@@ -70,6 +70,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                     "windows": f.windows,
                     "light_ratio": f.light_ratio,
                     "black_level": f.black.as_ref().map(black_level_json),
+                    "unseen_black_relative": crate::measure::tone_unseen::scale(f),
                 })),
                 "sweep_law": {
                     "kind": c.law.kind,

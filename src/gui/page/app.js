@@ -200,6 +200,8 @@ function drawOverlay() {
       // Through a lens model the binned region's edges are curves (outline_px).
       const outline = c.outline_px && c.outline_px.length ? c.outline_px : c.region_px;
       el("polygon", { points: outline.map((p) => p.join(",")).join(" "), class: "binned", "stroke-width": lw }, g);
+      // The paper read for a camera tone curve's black level (paper_bands_px).
+      for (const b of c.paper_bands_px || []) el("polygon", { points: b.map((p) => p.join(",")).join(" "), class: "paper-band", "stroke-width": lw }, g);
       for (const l of c.measured_lines_px) el("line", { x1: l[0][0], y1: l[0][1], x2: l[1][0], y2: l[1][1], class: "measured-line", "stroke-width": lw }, g);
       if (c.alias_line_px) { const l = c.alias_line_px; el("line", { x1: l[0][0], y1: l[0][1], x2: l[1][0], y2: l[1][1], class: "alias-line", "stroke-width": 2 * lw }, g); }
     }
