@@ -94,6 +94,8 @@ pub struct ChartModulation {
     /// true for the model M0·(1 + b f + c f²) with b < 0, false for the even
     /// M0·(1 + b f² + c f⁴) used where the data show no falling start.
     pub linear_start: bool,
+    /// The curve's relative slope at 0, M′(0)/M0 (per cy/px; ≤ 0, and 0 for an even start).
+    pub slope_rel: f64,
 }
 
 /// Estimates the chart's modulation by extrapolating the low-frequency end of
@@ -225,6 +227,11 @@ fn near_estimate(pts: &[&MtfPoint], f_lo: f64) -> Result<ChartModulation, String
         f_lo,
         f_hi: f_top,
         linear_start,
+        slope_rel: if linear_start {
+            fit.slope / (f_top * value)
+        } else {
+            0.0
+        },
     })
 }
 
@@ -275,6 +282,7 @@ fn log_estimate(pts: &[&MtfPoint], f_lo: f64) -> Option<ChartModulation> {
         f_lo,
         f_hi: f_top,
         linear_start,
+        slope_rel: if linear_start { fit.slope / f_top } else { 0.0 },
     })
 }
 

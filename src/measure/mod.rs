@@ -33,6 +33,7 @@ pub mod moire;
 pub mod patches;
 pub mod profile;
 pub mod sine_tone;
+pub mod surround_leak;
 pub mod synth;
 pub mod tone_black;
 pub mod tone_unseen;

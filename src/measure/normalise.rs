@@ -5,18 +5,19 @@
 
 use super::{Failure, MtfPoint, curve};
 
-/// The chart modulation (unitless), its one-sigma uncertainty (0 when printed)
-/// and the line saying where it came from: the printed `contrast` when the
-/// target gives one, else extrapolated from the `points` at `s ≥ s_min`.
+/// The chart modulation (unitless), its one-sigma uncertainty (0 when printed),
+/// the line saying where it came from, and the curve's relative slope at 0
+/// (per cy/px; 0 when printed or the start is even): the printed `contrast`
+/// when the target gives one, else extrapolated from the `points` at `s ≥ s_min`.
 pub(super) fn chart_modulation(
     points: &[MtfPoint],
     s_min: f64,
     contrast: Option<f64>,
     channel: &str,
     id: &str,
-) -> Result<(f64, f64, String), Failure> {
+) -> Result<(f64, f64, String, f64), Failure> {
     match contrast {
-        Some(c) => Ok((c, 0.0, format!("target: printed contrast {c}"))),
+        Some(c) => Ok((c, 0.0, format!("target: printed contrast {c}"), 0.0)),
         None => {
             let cm = curve::extrapolate_chart_modulation(points, s_min)
                 .map_err(|e| Failure::ModulationUnknown(format!("{channel}/{id}: {e}")))?;
@@ -34,6 +35,7 @@ pub(super) fn chart_modulation(
                         ", even start"
                     }
                 ),
+                cm.slope_rel,
             ))
         }
     }

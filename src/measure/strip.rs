@@ -12,7 +12,7 @@ use super::frequency::{
 };
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
-use super::{curve, law_guess, normalise, sine_tone, tone_black, tone_unseen};
+use super::{curve, law_guess, normalise, sine_tone, surround_leak, tone_black, tone_unseen};
 use crate::geometry::Point;
 use crate::photo::PlaneRef;
 use crate::photo::linearise::Tone;
@@ -259,12 +259,35 @@ pub(super) fn measure_strip(
     // 4.9 % (simulated shots, strong blur) against 0.2 % without them.
     let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
     let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles, s0, s1);
-    let (m_chart, m_chart_err, source) =
+    let (mut m_chart, mut m_chart_err, mut source, slope_rel) =
         normalise::chart_modulation(&points, s_min, contrast, channel, id)?;
     if m_chart_err > super::MAX_CHART_REL_ERR * m_chart {
         return Err(Failure::Unreliable(format!(
             "{channel}/{id}: the modulation is lost in noise (chart modulation {m_chart:.3} ± {m_chart_err:.3})"
         )));
+    }
+    // The light the lens's diffraction tail carries in from the surround:
+    // an offset on the strip's values, taken out of every modulation.
+    if slope_rel < 0.0 {
+        let to_linear = |v: f64| match tone_fix.as_ref().filter(|f| f.used) {
+            Some(f) => {
+                f.linear(v)
+                    - f.black
+                        .as_ref()
+                        .filter(|b| b.used)
+                        .map_or(0.0, |b| b.offset)
+            }
+            None => v,
+        };
+        let mean = prof.y.iter().sum::<f64>() / prof.y.len().max(1) as f64;
+        let taken = surround_leak::Surround::read(planes, strip).and_then(|sur| {
+            let leak_at = |s: f64| sur.leak_rel(slope_rel, strip, s, opts.margin, to_linear, mean);
+            surround_leak::take_out(&mut points, &mut m_chart, s_min, leak_at)
+        });
+        if let Some(leak) = taken {
+            m_chart_err = m_chart_err.hypot(surround_leak::LEAK_REL_ERR * leak.abs() * m_chart);
+            source = format!("{source}{}", surround_leak::source_note(leak));
+        }
     }
     // The block ripple is smoothed after the chart modulation is read from the
     // low end, so the lowest points stay independent (and unbent by the smoothing).
