@@ -289,13 +289,7 @@ mod tests {
             };
             data[y * wd..(y + 1) * wd].fill(v);
         }
-        let plane = Plane {
-            width: wd,
-            height: ht,
-            step: (1, 1),
-            offset: (0, 0),
-            data,
-        };
+        let plane = Plane::full(wd, ht, data);
         let st = strip(1000.0, 80.0);
         let sur = Surround::read(&[PlaneRef::from(&plane)], &st).unwrap();
         for side in &sur.sides {
