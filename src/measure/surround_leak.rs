@@ -213,7 +213,7 @@ mod tests {
     /// The leak a slit pupil's line spread (sinc², cut-off `fc`: MTF 1 − f/fc,
     /// so b = −1/fc) carries into the binned band from a surround `light(x)`
     /// at x px beyond either edge, integrated numerically (midpoint rule,
-    /// out to 10000 px), over the strip's mean `mean`.
+    /// out to 5000 px), over the strip's mean `mean`.
     fn integrated(fc: f64, w: f64, m: f64, mean: f64, light: impl Fn(f64) -> f64) -> f64 {
         let lsf = |x: f64| {
             let a = std::f64::consts::PI * fc * x;
@@ -227,8 +227,8 @@ mod tests {
         let mut leak = 0.0;
         for i in 0..n {
             let t = m + (1.0 - 2.0 * m) * (i as f64 + 0.5) / n as f64;
-            let (h, mut x, mut sum) = (0.02, 0.01, 0.0);
-            while x < 10_000.0 {
+            let (h, mut x, mut sum) = (0.05, 0.025, 0.0);
+            while x < 5_000.0 {
                 let dv = light(x) - mean;
                 sum += dv * (lsf(t * w + x) + lsf((1.0 - t) * w + x)) * h;
                 x += h;

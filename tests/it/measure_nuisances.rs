@@ -60,6 +60,11 @@ fn run_with(
     base: MeasureOptions,
 ) -> ((f64, f64, f64, f64), Vec<String>) {
     let m = measured(shot, seed, base);
+    (scores(shot, &m), m.notes.clone())
+}
+
+/// [`run`]'s figures of a measurement already made.
+fn scores(shot: &SynthShot, m: &Measurement) -> (f64, f64, f64, f64) {
     let c = &m.curves[0];
     let (mut se, mut n) = (0.0, 0);
     for p in c.points.iter().filter(|p| !p.aliased) {
@@ -85,13 +90,10 @@ fn run_with(
     }
     let f50 = c.figures.mtf50_cy_px.expect("MTF50 measured");
     (
-        (
-            (se / n as f64).sqrt(),
-            f50 / lo - 1.0,
-            c.chart_modulation,
-            c.chart_modulation_err,
-        ),
-        m.notes.clone(),
+        (se / n as f64).sqrt(),
+        f50 / lo - 1.0,
+        c.chart_modulation,
+        c.chart_modulation_err,
     )
 }
 
@@ -179,8 +181,9 @@ fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
             },
             ..shot.clone()
         };
-        let ((rms0, e0, cm0, _), notes0) =
-            run_with(&grey, 200 + variant, MeasureOptions::default());
+        let m0 = measured(&grey, 200 + variant, MeasureOptions::default());
+        let (rms0, e0, cm0, _) = scores(&grey, &m0);
+        let notes0 = &m0.notes;
         eprintln!(
             "picture style + light v{variant}: no paper RMS {rms0:.4} MTF50 {e0:+.4} chart {cm0:.4}; \
              paper RMS {rms:.4} MTF50 {e50:+.4} chart {cm:.4} ± {cm_err:.4}"
@@ -188,7 +191,6 @@ fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
         assert!(rms0 > 0.008 && e0.abs() > 0.015, "{rms0} {e0}");
         // Where it is not found the MTF's uncertainty carries the unseen
         // black level: the claimed σ covers the bend.
-        let m0 = measured(&grey, 200 + variant, MeasureOptions::default());
         let cover = covered(&grey, &m0, 2.0);
         eprintln!("  no paper: within 2 σ of the truth {cover:.2}");
         assert!(cover >= 0.9, "v{variant}: {cover:.2} within 2 σ");

@@ -203,8 +203,8 @@ fn diffraction_limited_lenses_start_linearly_and_hold_the_bars() {
             jpeg_quality: jpeg.then_some(90),
             seed: 31 + fnum as u64,
             render: RenderSettings {
-                fft_size: 2048,
-                margin_px: 256,
+                fft_size: 1024,
+                margin_px: 160,
                 ..RenderSettings::default()
             },
             ..camera()
