@@ -14,8 +14,8 @@
 //! shape alone is taken out (a curve through black, `g(0) = 0`, with
 //! curvature `g''` leaves `α ≈ −g''·μ²/2`, and its effect on a sine's
 //! modulation grows with `g''·μ` too). On the independent camera's picture
-//! styles (tanh S-curves of strength 1–2.5 on the sRGB code, 29 shots, light
-//! even and 1.5–2.1:1) |ε| was 2.4–4.3 × the correction's effect on an MTF
+//! styles (tanh S-curves of strength 1–2.5 on the sRGB code, light 1.5–2.1:1,
+//! 20 shots) |ε| was 2.4–4.3 × the correction's effect on an MTF
 //! of 0.5 ([`super::sine_tone::ToneFix::effect`]); the scale stated here is
 //! [`PER_EFFECT`] × that effect, taken as a one-sigma uncertainty of ε.
 
