@@ -322,6 +322,9 @@ def measure(img, corners, p, tmp):
     rms = math.sqrt(se / max(n, 1))
     f50 = (c.get("mtf50") or {}).get("cy_px")
     e50 = f50 / true_mtf50(p) - 1 if f50 else float("nan")
+    # MTF50's claimed one-sigma uncertainty, relative (since session 25).
+    s50 = (c.get("mtf50") or {}).get("err_cy_px")
+    s50 = s50 / f50 if f50 and s50 is not None else float("nan")
     t = c.get("tone_correction")
     if t and os.environ.get("SHOW_TONE"):
         print(f"  tone: used {t['used']} {t['significance']:.1f} σ MTF at 0.5 {100 * t['mtf_change_at_half']:+.2f} % shift {t['max_shift_255']:.2f}/255 light {t['light_ratio']:.2f}", flush=True)
@@ -330,7 +333,7 @@ def measure(img, corners, p, tmp):
             print(f"  black: not found: {b['why_not']}", flush=True)
         elif b:
             print(f"  black: used {b['used']} {100 * b['relative_to_mean']:+.2f} % ± {100 * b['offset_err'] / max(abs(b['offset']), 1e-12) * abs(b['relative_to_mean']):.2f} spread {b['light_spread']:.2f} resid {100 * b['residual']:.3f} % bands {b['bands']} {b['why_not']}", flush=True)
-    return (rms, e50, c["chart_modulation"] / 0.8 - 1), None
+    return (rms, e50, c["chart_modulation"] / 0.8 - 1, s50), None
 
 
 def main():
@@ -357,15 +360,17 @@ def main():
             if s is None:
                 print(f"{tag}: FAILED {err}", flush=True)
                 continue
-            print(f"{tag}: RMS {s[0]:.4f} MTF50 {100 * s[1]:+.2f} % chart mod. {100 * s[2]:+.2f} %", flush=True)
+            print(f"{tag}: RMS {s[0]:.4f} MTF50 {100 * s[1]:+.2f} % (± {100 * s[3]:.2f} %) chart mod. {100 * s[2]:+.2f} %", flush=True)
             res.append(s)
     if res:
         a = np.array(res)
         e50 = a[:, 1][np.isfinite(a[:, 1])]  # shots whose MTF stays above 0.5 have none
+        z50 = np.abs(a[:, 1] / a[:, 3])[np.isfinite(a[:, 1] / a[:, 3])]
+        zs = f", |z| ≤ {z50.max():.2f}, beyond 2 σ: {int(np.sum(z50 > 2))}" if len(z50) else ""
         r50 = f"{100 * e50.min():+.2f}…{100 * e50.max():+.2f} %" if len(e50) else "none"
         print(
             f"| {kind} | {len(res)} of {n} | worst RMS {a[:, 0].max():.4f} | MTF50 {r50} "
-            f"(beyond 1 %: {int(np.sum(np.abs(e50) > 0.01))}, none found: {len(a) - len(e50)}) | "
+            f"(beyond 1 %: {int(np.sum(np.abs(e50) > 0.01))}, none found: {len(a) - len(e50)}{zs}) | "
             f"chart mod. {100 * a[:, 2].min():+.2f}…{100 * a[:, 2].max():+.2f} % "
             f"(beyond 0.5 %: {int(np.sum(np.abs(a[:, 2]) > 0.005))}) |"
         )

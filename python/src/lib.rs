@@ -143,6 +143,7 @@ impl NativeMeasurement {
                 d.set_item("chart_modulation", c.chart_modulation)?;
                 d.set_item("chart_modulation_source", &c.chart_modulation_source)?;
                 d.set_item("mtf50_cy_px", c.figures.mtf50_cy_px)?;
+                d.set_item("mtf50_err_cy_px", c.figures.mtf50_err_cy_px)?;
                 d.set_item("mtf30_cy_px", c.figures.mtf30_cy_px)?;
                 d.set_item("mtf20_cy_px", c.figures.mtf20_cy_px)?;
                 d.set_item("mtf10_cy_px", c.figures.mtf10_cy_px)?;

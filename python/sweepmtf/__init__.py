@@ -58,6 +58,7 @@ class Curve:
 
     Figures (cycles/pixel, None when not reached): ``mtf50``, ``mtf30``, ``mtf20``,
     ``mtf10`` (where the MTF falls to nn % of its low-frequency value 1);
+    ``mtf50_err`` (MTF50's one-sigma uncertainty, cycles/pixel);
     ``mtf50p``, ``mtf20p``, ``mtf10p`` (nn % of the peak, searched from the peak
     upward; equal to ``mtf50`` etc. without a sharpening peak); ``peak_mtf`` and
     ``peak_cy_px`` (1 at 0 cy/px without sharpening), ``sharpening_peak`` (bool);
@@ -76,6 +77,7 @@ class Curve:
     mtf_err: np.ndarray
     aliased: np.ndarray
     mtf50: Optional[float]
+    mtf50_err: Optional[float]
     mtf30: Optional[float]
     mtf20: Optional[float]
     mtf10: Optional[float]
@@ -128,6 +130,7 @@ class Measurement:
                     mtf_err=d["mtf_err"],
                     aliased=d["aliased"],
                     mtf50=d["mtf50_cy_px"],
+                    mtf50_err=d["mtf50_err_cy_px"],
                     mtf30=d["mtf30_cy_px"],
                     mtf20=d["mtf20_cy_px"],
                     mtf10=d["mtf10_cy_px"],

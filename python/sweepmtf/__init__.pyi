@@ -25,6 +25,7 @@ class Curve:
     mtf_err: npt.NDArray[np.float64]
     aliased: npt.NDArray[np.bool_]
     mtf50: Optional[float]
+    mtf50_err: Optional[float]
     mtf30: Optional[float]
     mtf20: Optional[float]
     mtf10: Optional[float]

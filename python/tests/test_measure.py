@@ -58,6 +58,8 @@ def test_path_gives_the_cli_result(cli_run):
     # The curve's figures are the summary's.
     c0 = m.curves[0]
     assert close(c0.mtf50, cli_summary["curves"][0]["mtf50"]["cy_px"])
+    assert close(c0.mtf50_err, cli_summary["curves"][0]["mtf50"]["err_cy_px"])
+    assert 0 < c0.mtf50_err < 0.05 * c0.mtf50
     assert close(c0.mtf50p, cli_summary["curves"][0]["mtf50p"]["cy_px"])
     assert c0.sharpening_peak == cli_summary["curves"][0]["peak"]["sharpening"]
     assert m.warnings == cli_summary["warnings"]

@@ -59,12 +59,19 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
         } else {
             String::new()
         };
-        let f50 = match c.figures.mtf50_cy_px {
-            Some(f) => match m.pixel_pitch_mm {
-                Some(p) => format!("MTF50 {f:.3} cy/px ({:.1} lp/mm)", f / p),
-                None => format!("MTF50 {f:.3} cy/px"),
-            },
-            None => "MTF50 not reached".to_string(),
+        // MTF50 with its one-sigma uncertainty (4 decimals: it is often < 0.001 cy/px).
+        let f50 = match (c.figures.mtf50_cy_px, c.figures.mtf50_err_cy_px) {
+            (Some(f), e) => {
+                let v = match e {
+                    Some(e) => format!("MTF50 {f:.4} ± {e:.4} cy/px"),
+                    None => format!("MTF50 {f:.3} cy/px"),
+                };
+                match m.pixel_pitch_mm {
+                    Some(p) => format!("{v} ({:.1} lp/mm)", f / p),
+                    None => v,
+                }
+            }
+            (None, _) => "MTF50 not reached".to_string(),
         };
         // With a sharpening peak, MTF50P (half the peak) beside MTF50.
         let f50p = match (c.figures.sharpening_peak, c.figures.peak_mtf) {

@@ -13,6 +13,12 @@
 //! does not rise above 1 by more than [`PEAK_SIGMAS`] times its uncertainty
 //! and [`PEAK_FLOOR`] is noise): the peak is then taken as 1 at 0 cy/px and
 //! MTFnnP equals MTFnn exactly.
+//!
+//! MTF50 carries its one-sigma uncertainty: the points' `mtf_err` at the
+//! crossing (the smoothed uncertainty, interpolated) over the fitted
+//! curve's slope there. It is not divided by the fit's √n: neighbouring
+//! points share samples (each modulation is read over several periods),
+//! and near Nyquist the error is a slow beat with the alias, not noise.
 
 use super::curve::MtfPoint;
 use serde::{Deserialize, Serialize};
@@ -22,6 +28,10 @@ use serde::{Deserialize, Serialize};
 pub struct Figures {
     /// Frequency where the MTF first falls to 0.5 (cy/px).
     pub mtf50_cy_px: Option<f64>,
+    /// One-sigma uncertainty of MTF50 (cy/px): the points' MTF uncertainty
+    /// at the crossing over the curve's slope there (module text).
+    #[serde(default)]
+    pub mtf50_err_cy_px: Option<f64>,
     /// Frequency where the MTF first falls to 0.3 (cy/px).
     pub mtf30_cy_px: Option<f64>,
     /// Frequency where the MTF first falls to 0.2 (cy/px).
@@ -71,17 +81,38 @@ fn smoothed(points: &[MtfPoint]) -> (Vec<&MtfPoint>, Vec<f64>, Vec<f64>) {
 
 /// The first fall of the smoothed curve `sm` through `level` at or after
 /// index `from`: found on the smoothed points, then refined by a weighted
-/// local fit ([`refine_fall`]).
-fn fall_from(pts: &[&MtfPoint], sm: &[f64], from: usize, level: f64) -> Option<f64> {
+/// local fit ([`refine_fall`]). Returns the crossing (cy/px) and the curve's
+/// slope there (per cy/px: the fit's, else the smoothed points').
+fn fall_from(pts: &[&MtfPoint], sm: &[f64], from: usize, level: f64) -> Option<(f64, f64)> {
     for i in (from + 1).max(1)..pts.len() {
         if sm[i - 1] >= level && sm[i] < level {
             let t = (sm[i - 1] - level) / (sm[i - 1] - sm[i]);
-            let f0 = pts[i - 1].freq_cy_px + t * (pts[i].freq_cy_px - pts[i - 1].freq_cy_px);
+            let df = pts[i].freq_cy_px - pts[i - 1].freq_cy_px;
+            let f0 = pts[i - 1].freq_cy_px + t * df;
             let lo = pts[from].freq_cy_px;
-            return Some(refine_fall(pts, f0, level, lo).unwrap_or(f0));
+            return Some(refine_fall(pts, f0, level, lo).unwrap_or((f0, (sm[i] - sm[i - 1]) / df)));
         }
     }
     None
+}
+
+/// One-sigma uncertainty of a crossing at `f` (cy/px) where the curve falls
+/// with `slope` (per cy/px): the smoothed uncertainty `err` interpolated at
+/// `f`, over |slope|; at most `f` itself (a flat stretch tells nothing),
+/// None when not finite.
+fn crossing_sigma(pts: &[&MtfPoint], err: &[f64], f: f64, slope: f64) -> Option<f64> {
+    let k = pts.partition_point(|p| p.freq_cy_px < f);
+    let e = match (k.checked_sub(1), pts.get(k)) {
+        (Some(a), Some(b)) if pts[k].freq_cy_px > pts[a].freq_cy_px => {
+            let t = (f - pts[a].freq_cy_px) / (b.freq_cy_px - pts[a].freq_cy_px);
+            err[a] + t.clamp(0.0, 1.0) * (err[k] - err[a])
+        }
+        (Some(a), _) => err[a],
+        (None, Some(_)) => err[k],
+        (None, None) => return None,
+    };
+    let s = (e / slope.abs()).min(f);
+    (s.is_finite() && s >= 0.0).then_some(s)
 }
 
 /// Half-width of the crossing fit, as a fraction of the crossing's frequency.
@@ -95,8 +126,9 @@ const CROSSING_FIT_SIDE_POINTS: usize = 3;
 /// smoothed points follow a ripple of the curve (a coarse JPEG's block
 /// quantisation ripples it by ±0.015 with a period of ≈ 0.02 cy/px, which
 /// moved MTF50 by up to 1.3 %); the fit averages over it. None when the fit
-/// does not fall through `level` inside its window.
-fn refine_fall(pts: &[&MtfPoint], f0: f64, level: f64, lo: f64) -> Option<f64> {
+/// does not fall through `level` inside its window; else the crossing and
+/// the fit's slope there (per cy/px).
+fn refine_fall(pts: &[&MtfPoint], f0: f64, level: f64, lo: f64) -> Option<(f64, f64)> {
     let hw = CROSSING_FIT_HALF_WIDTH * f0;
     let k = pts.partition_point(|p| p.freq_cy_px < f0);
     let first = pts.partition_point(|p| p.freq_cy_px < (f0 - hw).max(lo));
@@ -153,13 +185,13 @@ fn refine_fall(pts: &[&MtfPoint], f0: f64, level: f64, lo: f64) -> Option<f64> {
         .into_iter()
         .filter(|d| d.is_finite() && *d >= d_lo && *d <= d_hi && p1 + 2.0 * p2 * d < 0.0)
         .min_by(|x, y| x.abs().total_cmp(&y.abs()))
-        .map(|d| f0 + d * span)
+        .map(|d| (f0 + d * span, (p1 + 2.0 * p2 * d) / span))
 }
 
 /// The frequency where the (non-aliased) curve first falls through `level`, by linear interpolation.
 pub fn crossing(points: &[MtfPoint], level: f64) -> Option<f64> {
     let (pts, sm, _) = smoothed(points);
-    fall_from(&pts, &sm, 0, level)
+    fall_from(&pts, &sm, 0, level).map(|c| c.0)
 }
 
 /// The (non-aliased) MTF at frequency `f`, by linear interpolation; None outside the measured range.
@@ -188,11 +220,14 @@ fn peak(pts: &[&MtfPoint], sm: &[f64], err: &[f64]) -> Option<(f64, f64, usize, 
 /// MTF50/30/20/10, the peak and MTF50P/20P/10P, and the MTF at Nyquist of a curve.
 pub fn figures(points: &[MtfPoint]) -> Figures {
     let (pts, sm, err) = smoothed(points);
-    let at = |level: f64| fall_from(&pts, &sm, 0, level);
+    let at = |level: f64| fall_from(&pts, &sm, 0, level).map(|c| c.0);
     let pk = peak(&pts, &sm, &err);
-    let at_p = |frac: f64| pk.and_then(|(v, _, i, _)| fall_from(&pts, &sm, i, frac * v));
+    let at_p =
+        |frac: f64| pk.and_then(|(v, _, i, _)| fall_from(&pts, &sm, i, frac * v).map(|c| c.0));
+    let f50 = fall_from(&pts, &sm, 0, 0.5);
     Figures {
-        mtf50_cy_px: at(0.5),
+        mtf50_cy_px: f50.map(|c| c.0),
+        mtf50_err_cy_px: f50.and_then(|(f, slope)| crossing_sigma(&pts, &err, f, slope)),
         mtf30_cy_px: at(0.3),
         mtf20_cy_px: at(0.2),
         mtf10_cy_px: at(0.1),
@@ -308,6 +343,30 @@ pub(super) mod tests {
         // MTF20 of the same Gaussian: 0.3 · √(ln 5 / ln 2).
         let f20 = 0.3 * (5f64.ln() / 2f64.ln()).sqrt();
         assert!((g.mtf20_cy_px.unwrap() / f20 - 1.0).abs() < 1e-4, "{g:?}");
+    }
+
+    /// MTF50's uncertainty is the points' uncertainty over the slope there:
+    /// on a Gaussian exp(−(f/0.3)²·ln 2) the slope at 0.3 is −ln 2/0.3 per
+    /// cy/px (differentiated by hand), so ±0.002 gives 0.002·0.3/ln 2; a
+    /// curve falling slowly through 0.5 is capped at MTF50 itself; a flat
+    /// curve has neither.
+    #[test]
+    fn mtf50_uncertainty_is_the_points_over_the_slope() {
+        let g = figures(&curve(
+            |f| (-(f / 0.3).powi(2) * std::f64::consts::LN_2).exp(),
+            0.002,
+        ));
+        let want = 0.002 * 0.3 / std::f64::consts::LN_2;
+        let got = g.mtf50_err_cy_px.unwrap();
+        // (The quadratic over ±8 % gives the slope to 0.14 %: the third derivative.)
+        assert!((got / want - 1.0).abs() < 5e-3, "{got} vs {want}");
+        // Linear fall with slope −0.01 per cy/px from 0.503: ±0.05 would be
+        // 5 cy/px; capped at the crossing (0.3 cy/px).
+        let g = figures(&curve(|f| 0.503 - 0.01 * f, 0.05));
+        assert_eq!(g.mtf50_err_cy_px, g.mtf50_cy_px);
+        assert!(g.mtf50_cy_px.is_some());
+        let g = figures(&curve(|_| 1.0, 0.002));
+        assert_eq!((g.mtf50_cy_px, g.mtf50_err_cy_px), (None, None));
     }
 
     /// A tent peaking at 1.2 at 0.1 cy/px, then falling linearly to 0 at 0.45:

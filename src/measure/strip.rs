@@ -312,6 +312,9 @@ pub(super) fn measure_strip(
             *fig = None;
         }
     }
+    if figures.mtf50_cy_px.is_none() {
+        figures.mtf50_err_cy_px = None;
+    }
     let aliasing_from = points.iter().find(|p| p.aliased).map(|p| p.freq_cy_px);
     let across = |s: f64| -> [Point; 2] {
         [

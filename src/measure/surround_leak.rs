@@ -64,7 +64,7 @@ impl Surround {
                 let (mut sum, mut n, mut tried) = (0.0, 0usize, 0usize);
                 for j in 0..ALONG {
                     let s = strip.length * (j as f64 + 0.5) / ALONG as f64;
-                    let per_t = px_per_t(strip, s);
+                    let per_t = strip.px_per_t(s);
                     if !(per_t > 0.0) {
                         continue;
                     }
@@ -107,7 +107,7 @@ impl Surround {
         to_linear: impl Fn(f64) -> f64,
         mean: f64,
     ) -> Option<f64> {
-        let w = px_per_t(strip, s) * strip.width;
+        let w = strip.px_per_t(s) * strip.width;
         let m = margin;
         let holds = slope_rel.is_finite()
             && slope_rel < 0.0
@@ -175,12 +175,6 @@ pub fn source_note(leak: f64) -> String {
         "; the surround's light through the lens's diffraction tail ({:+.2} % of the strip's mean) taken out",
         100.0 * leak
     )
-}
-
-/// Photo pixels per strip unit across the strip at `s`.
-fn px_per_t(strip: &Strip, s: f64) -> f64 {
-    let j = strip.to_image.jacobian([s, 0.5 * strip.width]);
-    j[0][1].hypot(j[1][1])
 }
 
 /// The plane's sample nearest the photo point `p`, if it holds one there.

@@ -124,10 +124,7 @@ impl BlackLevel {
 /// The two bands of paper beside a strip (above its t = 0 edge, below its
 /// t = width edge), as strips with the same `s`.
 pub fn bands(strip: &Strip) -> Vec<Strip> {
-    let j = strip
-        .to_image
-        .jacobian([0.5 * strip.length, 0.5 * strip.width]);
-    let px_per_t = j[0][1].hypot(j[1][1]);
+    let px_per_t = strip.px_per_t(0.5 * strip.length);
     if !(px_per_t.is_finite() && px_per_t > 0.0) {
         return Vec::new();
     }

@@ -30,6 +30,16 @@ fn freq(f: Option<f64>, m: &Measurement) -> Value {
     }
 }
 
+/// A frequency object given its one-sigma uncertainty beside it, in the same units (`err_cy_px`, `err_lw_ph`, `err_cy_mm`).
+fn with_err(mut o: Value, err: Option<f64>, m: &Measurement) -> Value {
+    if let (Value::Object(map), Value::Object(e)) = (&mut o, freq(err, m)) {
+        for (k, v) in e {
+            map.insert(format!("err_{k}"), v);
+        }
+    }
+    o
+}
+
 /// The summary as a JSON value.
 pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
     let curves: Vec<Value> = m
@@ -39,7 +49,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
             json!({
                 "channel": c.channel,
                 "sweep": c.sweep_id,
-                "mtf50": freq(c.figures.mtf50_cy_px, m),
+                "mtf50": with_err(freq(c.figures.mtf50_cy_px, m), c.figures.mtf50_err_cy_px, m),
                 "mtf30": freq(c.figures.mtf30_cy_px, m),
                 "mtf20": freq(c.figures.mtf20_cy_px, m),
                 "mtf10": freq(c.figures.mtf10_cy_px, m),

@@ -188,7 +188,11 @@ fn jpeg_pipelined_idct_matches_inline_on_repository_files() {
     for p in &files {
         let b = std::fs::read(p).expect("read");
         ok += same(&b, &p.display().to_string());
-        for (what, c) in damaged(&b) {
+        // A camera's multi-megapixel file takes every fourth damage (its
+        // 16 variants cost ≈ 9 s of the test's 11): the smaller files ≥ 512²
+        // (the pipelined path) take all of them.
+        let step = if b.len() > 500_000 { 4 } else { 1 };
+        for (what, c) in damaged(&b).into_iter().step_by(step) {
             same(&c, &format!("{} {what}", p.display()));
         }
     }

@@ -87,6 +87,17 @@ fn writes_csv_json_and_both_pictures() {
     assert!((f50 / truth - 1.0).abs() < 0.02, "{f50} vs {truth}");
     let mm = json["curves"][0]["mtf50"]["cy_mm"].as_f64().unwrap();
     assert!((mm - f50 / 0.0043).abs() < 1e-6);
+    // MTF50's one-sigma uncertainty beside it, in every unit; it covers the
+    // truth within 3 σ and is not absurdly wide.
+    let e50 = json["curves"][0]["mtf50"]["err_cy_px"].as_f64().unwrap();
+    assert!(e50 > 0.0 && e50 < 0.02 * f50, "{e50}");
+    assert!((f50 - truth).abs() < 3.0 * e50, "{f50} ± {e50} vs {truth}");
+    let e50_mm = json["curves"][0]["mtf50"]["err_cy_mm"].as_f64().unwrap();
+    assert!((e50_mm - e50 / 0.0043).abs() < 1e-6);
+    assert!(
+        stdout.contains(&format!("MTF50 {f50:.4} ± {e50:.4} cy/px")),
+        "{stdout}"
+    );
     // --json prints the summary instead of the line; --plot svg writes an SVG.
     let a = measure(&photo, &out, &["--roi", &roi, "--json", "--plot", "svg"]).success();
     let v: serde_json::Value = serde_json::from_slice(&a.get_output().stdout).unwrap();

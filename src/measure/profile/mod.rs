@@ -58,6 +58,12 @@ impl Strip {
         [[0.0, t0], [l, t0], [l, t1], [0.0, t1]].map(|p| self.to_photo(p))
     }
 
+    /// Image pixels (undistorted) per strip unit across the strip (along t), at distance `s` along its centre line.
+    pub fn px_per_t(&self, s: f64) -> f64 {
+        let j = self.to_image.jacobian([s, 0.5 * self.width]);
+        j[0][1].hypot(j[1][1])
+    }
+
     /// Scale and direction of the sweep in the image at distance `s` along the strip's centre line.
     pub fn scale_at(&self, s: f64) -> LocalScale {
         let mut j = self.to_image.jacobian([s, 0.5 * self.width]);
