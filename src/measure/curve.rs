@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use super::figures::{Figures, crossing, figures, mtf_at};
+pub use super::figures::{Figures, crossing, figures, mtf_at, mtf50_sigma};
 
 /// One point of a measured MTF curve.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

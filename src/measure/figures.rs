@@ -194,6 +194,15 @@ pub fn crossing(points: &[MtfPoint], level: f64) -> Option<f64> {
     fall_from(&pts, &sm, 0, level).map(|c| c.0)
 }
 
+/// MTF50's one-sigma uncertainty (cy/px) from the points' current `mtf_err`
+/// (as [`figures`] gives it): for uncertainties widened after the figures
+/// were taken, such as a tone curve's unseen black level.
+pub fn mtf50_sigma(points: &[MtfPoint]) -> Option<f64> {
+    let (pts, sm, err) = smoothed(points);
+    let (f, slope) = fall_from(&pts, &sm, 0, 0.5)?;
+    crossing_sigma(&pts, &err, f, slope)
+}
+
 /// The (non-aliased) MTF at frequency `f`, by linear interpolation; None outside the measured range.
 pub fn mtf_at(points: &[MtfPoint], f: f64) -> Option<f64> {
     let pts: Vec<&MtfPoint> = points.iter().filter(|p| !p.aliased).collect();

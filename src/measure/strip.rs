@@ -343,6 +343,10 @@ pub(super) fn measure_strip(
                         .ok()
                         .map(|c| c.0)
                 });
+                // MTF50 where it was given: its uncertainty from the widened points.
+                if figures.mtf50_cy_px.is_some() {
+                    figures.mtf50_err_cy_px = curve::mtf50_sigma(&points);
+                }
                 (
                     m_chart_err.hypot(share),
                     format!("{source}{}", tone_unseen::source_note(share, eps)),

@@ -194,6 +194,15 @@ fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
         let cover = covered(&grey, &m0, 2.0);
         eprintln!("  no paper: within 2 σ of the truth {cover:.2}");
         assert!(cover >= 0.9, "v{variant}: {cover:.2} within 2 σ");
+        // And MTF50's claimed σ (from the widened points) covers its error.
+        let f50 = m0.curves[0].figures.mtf50_cy_px.unwrap();
+        let s50 = m0.curves[0].figures.mtf50_err_cy_px.unwrap();
+        let miss = f50 - f50 / (1.0 + e0);
+        eprintln!("  no paper: MTF50 {f50:.4} ± {s50:.4}, off by {miss:+.4}");
+        assert!(
+            miss.abs() <= 2.0 * s50,
+            "v{variant}: MTF50 off by {miss:+.4}, ± {s50:.4}"
+        );
         // The region picture's paper bands: two, one beside each long edge,
         // outside the binned region.
         let c = &m0.curves[0];
