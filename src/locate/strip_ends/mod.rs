@@ -12,8 +12,12 @@
 //! every 0.25 px along the strip and grouped into 12 bands; in 24 windows along
 //! the strip the residual slant that makes the bands' sum most energetic (the
 //! bars line up) is found. Only windows below aliasing count (from the
-//! low-frequency end while the frequency rises, ≤ 0.42 cy/px): beyond, the bars
-//! alias into patterns of other directions. A robust weighted line through the
+//! low-frequency end while the frequency rises, ≤ 0.30 cy/px): beyond, the bars
+//! alias into patterns of other directions, and the lines' bilinear samples
+//! carry an alias at 1 − f (at 0.42 cy/px half the bars' amplitude, at 0.30 a
+//! fifth) whose phase walks with each line's sub-pixel offset, so a strip
+//! near the pixel rows reads a false slant there (0.42 turned exact ends of a
+//! sharp strip by 0.28 px). A robust weighted line through the
 //! windows' slants updates `s`; two passes, a wide coarse search and a fine
 //! one. The end lines are then the bars through the current ends' centre
 //! points, so the strip's extent (already kept inside the user's lines) is
@@ -64,7 +68,8 @@ fn below_aliasing(ws: Vec<WinSlant>) -> Vec<WinSlant> {
     if down.len() > up.len() { down } else { up }
 }
 
-/// Highest local frequency (cycles/px along the strip) a window may have.
+/// Highest local frequency (cycles/px along the strip) a window may have
+/// (module text: the bilinear samples' alias).
 const F_MAX: f64 = 0.30;
 
 /// A robust line through the windows' slants.
