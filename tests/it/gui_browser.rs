@@ -214,9 +214,18 @@ pub(crate) fn base64_decode(s: &str) -> Vec<u8> {
 
 fn mtf50(d: &Driver) -> f64 {
     let v = d.js("const r = document.getElementById('mtf50-0'); return r ? r.dataset.cyPx : null;");
-    v.as_str()
+    let f: f64 = v
+        .as_str()
         .and_then(|s| s.parse().ok())
-        .expect("MTF50 shown")
+        .expect("MTF50 shown");
+    // The table's cell shows it with its one-sigma uncertainty.
+    let cell = d.js("return document.getElementById('mtf50-0').children[1].textContent;");
+    let cell = cell.as_str().unwrap_or_default();
+    assert!(
+        cell.starts_with(&format!("{f:.4} ± ")),
+        "MTF50 cell {cell:?} for {f}"
+    );
+    f
 }
 
 /// Chromium and chromedriver, or None (the test then reports itself

@@ -364,7 +364,9 @@ function drawFigures() {
     const c = r.curves[k];
     const name = r.curves.length > 1 ? `${c.channel}/${c.sweep_id}` : c.channel;
     const v = s.mtf50;
-    const cells = [name, reached(v, 4)].concat(pitch ? [v && v.cy_mm !== undefined ? fmt(v.cy_mm, 1) : ""] : [],
+    // MTF50 with its one-sigma uncertainty where the summary gives one.
+    const f50 = v && v.err_cy_px !== undefined && v.err_cy_px !== null ? `${fmt(v.cy_px, 4)} ± ${fmt(v.err_cy_px, 4)}` : reached(v, 4);
+    const cells = [name, f50].concat(pitch ? [v && v.cy_mm !== undefined ? fmt(v.cy_mm, 1) : ""] : [],
       [v ? fmt(v.lw_ph, 0) : "", reached(s.mtf10, 4), fmt(c.figures.mtf_nyquist, 3), fmt(c.chart_modulation, 3)]);
     const tr = row(cells);
     tr.id = `mtf50-${k}`;
