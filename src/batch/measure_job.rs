@@ -136,6 +136,7 @@ pub fn result_of(
         mtf50_cy_px: mtf50,
         mtf50_cy_mm: mtf50.zip(m.pixel_pitch_mm).map(|(f, p)| f / p),
         mtf50_lw_ph: mtf50.map(|f| lw_ph(f, m.image_height)),
+        mtf50_err_cy_px: fig.as_ref().and_then(|f| f.mtf50_err_cy_px),
         mtf20_cy_px: fig.as_ref().and_then(|f| f.mtf20_cy_px),
         mtf10_cy_px: fig.as_ref().and_then(|f| f.mtf10_cy_px),
         mtf50p_cy_px: fig.as_ref().and_then(|f| f.mtf50p_cy_px),

@@ -16,6 +16,8 @@ pub struct ShotResult {
     pub mtf50_cy_mm: Option<f64>,
     /// MTF50 in line widths per picture height.
     pub mtf50_lw_ph: Option<f64>,
+    /// One-sigma uncertainty of MTF50, in cycles/pixel.
+    pub mtf50_err_cy_px: Option<f64>,
     /// Frequency where the MTF falls to 0.2, in cycles/pixel.
     pub mtf20_cy_px: Option<f64>,
     /// Frequency where the MTF falls to 0.1, in cycles/pixel.

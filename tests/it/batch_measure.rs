@@ -112,6 +112,9 @@ fn series_with_bad_files_gives_truth_rows_error_rows_and_exit_7() {
             (got - m50).abs() < 0.01,
             "{name}: MTF50 {got} against truth {m50}"
         );
+        // Its one-sigma uncertainty beside it.
+        let err: f64 = r["mtf50_err_cy_px"].parse().unwrap();
+        assert!(err > 0.0 && err < 0.05 * got, "{name}: ± {err}");
         assert_eq!(r["f_number"].parse::<f64>().unwrap(), *n);
         assert_eq!(r["make"], "SimCam");
         for suffix in ["mtf.csv", "summary.json", "mtf.png", "roi.png", "done.json"] {
