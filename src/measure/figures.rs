@@ -99,8 +99,12 @@ fn fall_from(pts: &[&MtfPoint], sm: &[f64], from: usize, level: f64) -> Option<(
 /// One-sigma uncertainty of a crossing at `f` (cy/px) where the curve falls
 /// with `slope` (per cy/px): the smoothed uncertainty `err` interpolated at
 /// `f`, over |slope|; at most `f` itself (a flat stretch tells nothing),
-/// None when not finite.
+/// None when not finite (an infinite slope, from repeated frequencies, would
+/// claim none).
 fn crossing_sigma(pts: &[&MtfPoint], err: &[f64], f: f64, slope: f64) -> Option<f64> {
+    if !slope.is_finite() {
+        return None;
+    }
     let k = pts.partition_point(|p| p.freq_cy_px < f);
     let e = match (k.checked_sub(1), pts.get(k)) {
         (Some(a), Some(b)) if pts[k].freq_cy_px > pts[a].freq_cy_px => {
@@ -339,6 +343,8 @@ pub(super) mod tests {
             g.mtf50_cy_px.is_none_or(|f| (0.0..=0.5).contains(&f)),
             "{g:?}"
         );
+        // MTF50's uncertainty is never claimed as nothing on such input.
+        assert!(g.mtf50_err_cy_px.is_none_or(|e| e > 0.0), "{g:?}");
     }
 
     /// A smooth curve's crossings are unchanged by the fit (to 10⁻⁴ relative).
@@ -376,6 +382,12 @@ pub(super) mod tests {
         assert!(g.mtf50_cy_px.is_some());
         let g = figures(&curve(|_| 1.0, 0.002));
         assert_eq!((g.mtf50_cy_px, g.mtf50_err_cy_px), (None, None));
+        // A vertical step (repeated frequencies): no claim rather than zero.
+        let pts = curve(|f| 1.0 - f, 0.01);
+        let refs: Vec<&MtfPoint> = pts.iter().collect();
+        let err = vec![0.01; refs.len()];
+        assert_eq!(crossing_sigma(&refs, &err, 0.3, f64::NEG_INFINITY), None);
+        assert_eq!(crossing_sigma(&refs, &err, 0.3, 0.0), Some(0.3));
     }
 
     /// A tent peaking at 1.2 at 0.1 cy/px, then falling linearly to 0 at 0.45:
