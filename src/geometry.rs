@@ -135,6 +135,14 @@ impl Homography {
     }
 }
 
+/// The largest distance (pixels) between corresponding points of `a` and `b`: how far a set of corners moved.
+pub fn largest_move(a: &[Point], b: &[Point]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1]))
+        .fold(0.0, f64::max)
+}
+
 /// The four corners of an axis-aligned rectangle, in order round it: (x0,y0), (x1,y0), (x1,y1), (x0,y1).
 pub fn rect_corners(x0: f64, y0: f64, x1: f64, y1: f64) -> [Point; 4] {
     [[x0, y0], [x1, y0], [x1, y1], [x0, y1]]

@@ -80,11 +80,7 @@ pub(super) fn refine_or_keep<S: crate::locate::AtImage + ?Sized>(
 ) -> [Point; 4] {
     match crate::locate::refine_roi(src, given, target, REFINE_SEARCH_PX) {
         Ok(refined) => {
-            let moved = given
-                .iter()
-                .zip(&refined)
-                .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-                .fold(0.0, f64::max);
+            let moved = crate::geometry::largest_move(&given, &refined);
             if target.is_some() {
                 said.notes.push(format!(
                     "region corners refined to the edges (moved up to {moved:.2} px)"

@@ -477,12 +477,7 @@ fn quartic_distortion_on_a_tilted_card_with_exact_and_loose_corners() {
         check_default_bars(name, &score(&shot, &m));
         if name == "exact corners" {
             // Refinement never makes exact corners worse (issue 15 item 4).
-            let moved = m
-                .roi
-                .iter()
-                .zip(&exact)
-                .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-                .fold(0.0, f64::max);
+            let moved = sweepmtf::geometry::largest_move(&m.roi, &exact);
             assert!(moved <= 0.35, "{name}: moved {moved:.2} px");
         }
     }

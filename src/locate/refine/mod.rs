@@ -424,11 +424,7 @@ pub fn refine_roi<S: AtImage + ?Sized>(
             "the edges near the given corners are ambiguous (RMS {rms:.2} px off the refined lines)"
         ));
     }
-    let moved = out
-        .iter()
-        .zip(&corners)
-        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-        .fold(0.0, f64::max);
+    let moved = crate::geometry::largest_move(&out, &corners);
     // (A strip's ends are turned along the bars about their centres: each end
     // corner slides along its long edge by up to half the largest slant.)
     let trim = if target.is_none() {

@@ -428,12 +428,7 @@ mod tests {
         let (plane, truth) = render_quad(0.8, quad);
         let g = Gray::of_plane(&plane);
         let fit = align_ends_settled(&g, &truth, 20.0).unwrap();
-        let moved = fit
-            .corners
-            .iter()
-            .zip(&quad)
-            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-            .fold(0.0, f64::max);
+        let moved = crate::geometry::largest_move(&fit.corners, &quad);
         eprintln!("exact corners moved up to {moved:.3} px");
         assert!(moved < 0.05, "corners moved up to {moved:.3} px: {fit:?}");
     }

@@ -70,11 +70,7 @@ pub fn snap_to_edges(
         }
     }
     let snapped = snapped.map(|p| lens.distort(p));
-    let moved = snapped
-        .iter()
-        .zip(roi)
-        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-        .fold(0.0, f64::max);
+    let moved = crate::geometry::largest_move(&snapped, roi);
     (moved.is_finite() && moved <= max_move && crate::geometry::check_quad(&snapped).is_ok())
         .then_some((snapped, moved))
 }
