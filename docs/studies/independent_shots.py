@@ -20,18 +20,31 @@ The camera, all in numpy:
 - the sensor: Poisson shot noise (full well 9000 e⁻) and 3 e⁻ read noise;
 - optional unsharp-mask sharpening in linear light (discrete Gaussian
   kernel, its exact discrete transfer in the truth);
-- sRGB encoding to 8 bits, then Pillow's libjpeg at quality Q with 4:2:0
-  chroma (or PNG).
+- sRGB encoding (and optionally a picture style's S-curve on the code),
+  optionally an unsharp mask on the code, 8 bits, then Pillow's libjpeg at
+  quality Q with 4:2:0 chroma (or PNG).
 
 Truth at a frequency f along the strip (angle θ in the image):
 OTF_lens(f) · B(f cos θ) · B(f sin θ) · (1 + a (1 − G_d(f cos θ, f sin θ))).
+With the code sharpened (kinds codesharp and jpegcam: an unsharp mask on the
+sRGB or picture-style code, as a camera's JPEG engine does, amount 0.3–1,
+radius 0.6–1.5 px) the camera is not linear and has no MTF of its own: the
+truth is then the one a sine chart of this contrast at this light defines,
+as every modulation-based method reads it: a pure sine of that transfer up
+to the code, at the light where the strip has local frequency f, encoded,
+each harmonic k of the code scaled by the mask's discrete transfer at k·f,
+decoded; its fundamental over its mean, over the printed 0.8
+(`code_sharpened`). Over the input's mean instead it would read up to 8 %
+higher at 0.2 cy/px: sharpening the code raises the linear mean where it
+swings wider (by 14 % through a strong S-curve).
 
 Run: python3 docs/studies/independent_shots.py N SEED [KIND] (needs numpy,
 scipy, pillow and a release build: `cargo build --release`). KIND: jpeg75,
 jpeg85, png, sharpen, keystone, distort, light, all, tone (a camera's
 picture style: a tanh S-curve of strength 1–2.5 on the sRGB code), camera
 (all and tone), tonelight (tone and light: the black level from the paper,
-session 23). EXTRA="--tone file" passes options to `measure`;
+session 23), codesharp (sRGB, the code sharpened; session 26), jpegcam
+(a picture style and the code sharpened after it, as camera JPEGs are). EXTRA="--tone file" passes options to `measure`;
 SHOW_TONE=1 prints the tone correction and its black level found; with
 KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay. Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
@@ -95,7 +108,8 @@ def usm_transfer(fx, fy, p):
 def truth(f, p):
     th = p["theta"]
     fx, fy = f * math.cos(th), f * math.sin(th)
-    return float(otf_lens(np.array(f), p) * box(fx) * box(fy) * usm_transfer(fx, fy, p))
+    t = float(otf_lens(np.array(f), p) * box(fx) * box(fy) * usm_transfer(fx, fy, p))
+    return code_sharpened(f, t, p) if p["code_amount"] > 0 else t
 
 
 def homography(src, dst):
@@ -144,9 +158,8 @@ def reflectance(u, v, p):
     return np.where(inside, sweep, 1.0)
 
 
-def render(p, rng):
-    """The 8-bit sRGB frame (H×W×3) and the strip's corners in the image."""
-    # The chart strip (mm) onto the undistorted image: a keystone quadrilateral.
+def strip_geometry(p):
+    """The strip's corners in the undistorted image (px) and the homography chart mm → image."""
     L, h = p["L"], p["h"]
     cx, cy = p["cx"], p["cy"]
     half_len = p["len_px"] / 2
@@ -156,7 +169,81 @@ def render(p, rng):
     local = [(-half_len, -h0 / 2), (half_len, -h1 / 2), (half_len, h1 / 2), (-half_len, h0 / 2)]
     dst = [(cx + c * a - s * b, cy + s * a + c * b) for a, b in local]
     src = [(0, 0), (L, 0), (L, h), (0, h)]
-    hm = homography(src, dst)
+    return dst, homography(src, dst)
+
+
+def light_raw(xx, yy, p):
+    rn = math.hypot(W, H) / 2
+    r2 = ((xx - W / 2) ** 2 + (yy - H / 2) ** 2) / rn**2
+    vig = 1 - p["vignette"] * r2
+    grad = 1 + p["gradient"] * ((xx - W / 2) * math.cos(p["grad_dir"]) + (yy - H / 2) * math.sin(p["grad_dir"])) / rn
+    return vig * grad
+
+
+def light_at(xx, yy, p):
+    """The light on the chart at image position (px): white paper there reads this (linear)."""
+    if "light_max" not in p:
+        gy, gx = np.mgrid[0:H, 0:W]
+        p["light_max"] = float(light_raw(gx, gy, p).max())
+    return light_raw(xx, yy, p) / p["light_max"] * p["exposure"]
+
+
+def encode(lin, p):
+    """Linear light → the file's code (sRGB and the picture style), 0–1."""
+    lin = np.clip(lin, 0, 1)
+    c = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
+    if p["tone"] > 0:
+        # A camera's S-shaped picture style on top of sRGB: tanh of strength k about mid-grey code.
+        k = p["tone"]
+        c = 0.5 + 0.5 * np.tanh(k * (c - 0.5)) / math.tanh(k / 2)
+    return c
+
+
+def decode(c, p):
+    """The file's code → linear light: the inverse of `encode`."""
+    c = np.clip(c, 0, 1)
+    if p["tone"] > 0:
+        k = p["tone"]
+        c = 0.5 + np.arctanh(np.clip((2 * c - 1) * math.tanh(k / 2), -1 + 1e-15, 1 - 1e-15)) / k
+    return np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
+
+
+def code_sharpened(f, t_lin, p):
+    """The MTF read in linear light where the code is sharpened: a pure sine of
+    transfer `t_lin` up to the code, at the light where the strip has local
+    frequency f, encoded, each harmonic k of the code scaled by the unsharp
+    mask's discrete transfer at k·f, clipped and decoded; its modulation (the
+    fundamental over the mean, both after: sharpening the code raises the
+    linear mean where it swings wider) over the printed 0.8. A system that is
+    not linear has no MTF of its own: this is the one a sine chart of this
+    contrast at this light defines, as every modulation-based method reads it."""
+    th = p["theta"]
+    fx, fy = f * math.cos(th), f * math.sin(th)
+    # Where along the strip (chart mm) the local frequency is f, and its light.
+    px_per_mm = p["len_px"] / p["L"]
+    k = math.log(p["f1"] / p["f0"]) / p["L"]
+    u = min(max(math.log(max(f * px_per_mm, 1e-9) / p["f0"]) / k, 0.0), p["L"])
+    _, hm = strip_geometry(p)
+    x, y = apply_h(hm, u, p["h"] / 2)
+    x, y = distort(x, y, p)
+    ell = float(light_at(np.array(x), np.array(y), p))
+    n = 512
+    ph = 2 * np.pi * np.arange(n) / n
+    amp = ell * 0.4 * t_lin
+    code = encode(ell * 0.5 + amp * np.cos(ph), p)
+    spec = np.fft.rfft(code)
+    xk, kern = usm_kernel(p["code_radius"])
+    hk = np.arange(len(spec))[:, None]
+    g = (kern * np.cos(2 * np.pi * hk * fx * xk)).sum(axis=1) * (kern * np.cos(2 * np.pi * hk * fy * xk)).sum(axis=1)
+    spec *= 1 + p["code_amount"] * (1 - g)
+    out = np.fft.rfft(decode(np.fft.irfft(spec, n), p))
+    return 2 * abs(out[1]) / abs(out[0]) / 0.8
+
+
+def render(p, rng):
+    """The 8-bit sRGB frame (H×W×3) and the strip's corners in the image."""
+    L, h = p["L"], p["h"]
+    dst, hm = strip_geometry(p)
     hinv = np.linalg.inv(hm)
     # Supersampled sample positions (image px), only over the strip's surround band.
     # Pixel (i, j) covers [i, i + 1) × [j, j + 1) (sweepmtf's convention: origin at the top-left corner).
@@ -185,12 +272,7 @@ def render(p, rng):
     refl = img.reshape(H, S, W, S).mean(axis=(1, 3))
     # Light: gradient × vignetting × tint; exposure so white paper peaks at p["exposure"].
     yy, xx = np.mgrid[0:H, 0:W]
-    rn = math.hypot(W, H) / 2
-    r2 = ((xx - W / 2) ** 2 + (yy - H / 2) ** 2) / rn**2
-    vig = 1 - p["vignette"] * r2
-    grad = 1 + p["gradient"] * ((xx - W / 2) * math.cos(p["grad_dir"]) + (yy - H / 2) * math.sin(p["grad_dir"])) / rn
-    light = vig * grad
-    light = light / light.max() * p["exposure"]
+    light = light_at(xx, yy, p)
     tint = np.array([1.0, 0.8, 0.55])
     lin = refl[..., None] * light[..., None] * tint[None, None, :]
     # Sensor: Poisson shot noise and read noise in electrons, full well 9000.
@@ -206,12 +288,15 @@ def render(p, rng):
 
         blur = convolve1d(convolve1d(lin, k, axis=0, mode="nearest"), k, axis=1, mode="nearest")
         lin = lin + p["amount"] * (lin - blur)
-    lin = np.clip(lin, 0, 1)
-    srgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
-    if p["tone"] > 0:
-        # A camera's S-shaped picture style on top of sRGB: tanh of strength k about mid-grey code.
-        k = p["tone"]
-        srgb = 0.5 + 0.5 * np.tanh(k * (srgb - 0.5)) / math.tanh(k / 2)
+    srgb = encode(lin, p)
+    if p["code_amount"] > 0:
+        # A camera's own sharpening, as JPEG engines do it: an unsharp mask
+        # on the code (after the tone curve), not in linear light.
+        x, k = usm_kernel(p["code_radius"])
+        from scipy.ndimage import convolve1d
+
+        blur = convolve1d(convolve1d(srgb, k, axis=0, mode="nearest"), k, axis=1, mode="nearest")
+        srgb = srgb + p["code_amount"] * (srgb - blur)
     out = np.clip(np.round(srgb * 255), 0, 255).astype(np.uint8)
     corners = [distort(x, y, p) for x, y in dst]
     return out, corners
@@ -243,6 +328,8 @@ def draw(kind, rng):
         quality=85,
         click=0.0,
         tone=0.0,
+        code_amount=0.0,
+        code_radius=1.0,
     )
     # Chart frequencies chosen so the strip reaches ≈ 0.008 … 0.6 cy/px.
     px_per_mm = p["len_px"] / p["L"]
@@ -269,6 +356,12 @@ def draw(kind, rng):
         p["vignette"] = 0.5
         p["gradient"] = u(0.3, 0.5)
         p["grad_dir"] = math.atan2(math.sin(p["theta"]), math.cos(p["theta"])) + (0 if u() < 0.5 else math.pi)
+    if kind in ("codesharp", "jpegcam"):
+        # Drawn last: the other kinds' shots stay as they were.
+        p["code_amount"] = u(0.3, 1.0)
+        p["code_radius"] = u(0.6, 1.5)
+    if kind == "jpegcam":
+        p["tone"] = u(1.0, 2.5)
     # Overrides for probing one shot: P_<name>=value (e.g. P_fmt=png, P_k1=0).
     for k, v in os.environ.items():
         if k.startswith("P_") and k[2:] in p:
@@ -327,7 +420,7 @@ def measure(img, corners, p, tmp):
     s50 = s50 / f50 if f50 and s50 is not None else float("nan")
     t = c.get("tone_correction")
     if t and os.environ.get("SHOW_TONE"):
-        print(f"  tone: used {t['used']} {t['significance']:.1f} σ MTF at 0.5 {100 * t['mtf_change_at_half']:+.2f} % shift {t['max_shift_255']:.2f}/255 light {t['light_ratio']:.2f}", flush=True)
+        print(f"  tone: used {t['used']} {t['significance']:.1f} σ MTF at 0.5 {100 * t['mtf_change_at_half']:+.2f} % shift {t['max_shift_255']:.2f}/255 light {t['light_ratio']:.2f} code sharpening seen {t.get('code_sharpening_seen')}", flush=True)
         b = t.get("black_level")
         if b and b["offset"] is None:
             print(f"  black: not found: {b['why_not']}", flush=True)

@@ -79,6 +79,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                     "code_range": [f.code_range.0, f.code_range.1],
                     "windows": f.windows,
                     "light_ratio": f.light_ratio,
+                    "code_sharpening_seen": f.sharpening_seen,
                     "black_level": f.black.as_ref().map(black_level_json),
                     "unseen_black_relative": crate::measure::tone_unseen::scale(f),
                 })),
