@@ -35,6 +35,7 @@ pub mod profile;
 pub mod sine_tone;
 pub mod surround_leak;
 pub mod synth;
+pub mod synth_code_sharpen;
 pub mod tone_black;
 pub mod tone_unseen;
 

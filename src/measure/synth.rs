@@ -12,6 +12,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 use super::law::PhaseLaw;
+pub use super::synth_code_sharpen::CodeSharpen;
 use crate::geometry::{Homography, Point, rect_corners};
 use crate::photo::linearise::linear_to_srgb;
 use std::f64::consts::PI;
@@ -73,6 +74,9 @@ pub struct Nuisances {
     /// twice the strip's mean (the strip spans 0.1–0.9 of the paper at
     /// contrast 0.8); else the surround is the strip's mean.
     pub paper_surround: bool,
+    /// A camera's unsharp mask on the code, after the picture style (see
+    /// [`super::synth_code_sharpen`]; its truth assumes even light).
+    pub code_sharpen: Option<CodeSharpen>,
 }
 
 /// A picture style's S-curve of strength `k` on a code (0–1); `k` = 0 leaves it.
@@ -94,13 +98,36 @@ impl Default for Nuisances {
             chroma_420: false,
             picture_style: 0.0,
             paper_surround: false,
+            code_sharpen: None,
         }
     }
 }
 
 impl SynthShot {
-    /// The true MTF at `f` cycles/pixel.
+    /// The true MTF at `f` cycles/pixel (with the code sharpened, the
+    /// modulation transfer a sine of the chart's contrast reads).
     pub fn truth(&self, f: f64) -> f64 {
+        let t = self.linear_transfer(f);
+        match self.nuisance.code_sharpen {
+            Some(cs) => {
+                let q = self.quad;
+                let angle = (q[1][1] - q[0][1]).atan2(q[1][0] - q[0][0]);
+                cs.truth(
+                    f,
+                    angle,
+                    t,
+                    self.mean,
+                    self.contrast,
+                    self.nuisance.picture_style,
+                )
+            }
+            None => t,
+        }
+    }
+
+    /// The transfer in linear light at `f` cycles/pixel: the blur and any
+    /// unsharp mask in linear light.
+    fn linear_transfer(&self, f: f64) -> f64 {
         let blur = (-2.0 * PI * PI * self.sigma_px * self.sigma_px * f * f).exp();
         match self.nuisance.usm {
             Some((a, r)) => blur * (1.0 + a * (1.0 - (-2.0 * PI * PI * r * r * f * f).exp())),
@@ -167,7 +194,7 @@ impl SynthShot {
                 }
                 let j = inv.jacobian(p);
                 let f = self.law.freq(s) * j[0][0].hypot(j[0][1]);
-                let m = self.contrast * self.truth(f);
+                let m = self.contrast * self.linear_transfer(f);
                 out[y * self.width + x] =
                     light * self.mean * (1.0 + m * (2.0 * PI * self.law.phase(s)).cos());
             }
@@ -185,7 +212,7 @@ impl SynthShot {
         } else {
             1
         };
-        let mut code = |v: f64| -> u8 {
+        let mut code = |v: f64| -> f64 {
             let v = match self.noise {
                 Some((full, read)) => {
                     let e = v * full;
@@ -193,17 +220,28 @@ impl SynthShot {
                 }
                 None => v,
             };
-            let c = linear_to_srgb(v.clamp(0.0, 1.0));
-            (255.0 * picture_style(c, self.nuisance.picture_style)).round() as u8
+            picture_style(
+                linear_to_srgb(v.clamp(0.0, 1.0)),
+                self.nuisance.picture_style,
+            )
         };
-        let codes: Vec<u8> = lin
-            .iter()
-            .flat_map(|&v| {
-                let mut px = [0u8; 3];
-                for c in 0..channels {
-                    px[c] = code(v * gains[c]);
-                }
-                px.into_iter().take(channels)
+        // Per channel, a plane of codes (0–1), sharpened where the camera does.
+        let mut planes = vec![Vec::with_capacity(lin.len()); channels];
+        for &v in &lin {
+            for (c, plane) in planes.iter_mut().enumerate() {
+                plane.push(code(v * gains[c]));
+            }
+        }
+        if let Some(cs) = self.nuisance.code_sharpen {
+            for plane in &mut planes {
+                cs.apply(plane, self.width);
+            }
+        }
+        let codes: Vec<u8> = (0..lin.len())
+            .flat_map(|i| {
+                planes
+                    .iter()
+                    .map(move |p| (255.0 * p[i].clamp(0.0, 1.0)).round() as u8)
             })
             .collect();
         let mut buf = Cursor::new(Vec::new());

@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use assert_cmd::Command;
-use sweepmtf::measure::synth::{SynthShot, nuisance_cases};
+use sweepmtf::measure::synth::{CodeSharpen, SynthShot, nuisance_cases};
 use sweepmtf::measure::{MeasureOptions, Measurement, measure_bytes, measure_decoded};
 use sweepmtf::photo::decode::decode_bytes;
 
@@ -289,6 +289,39 @@ fn unsharp_mask_peaking_near_1_15_within_0_01_and_never_clipped() {
         (peak - peak_truth).abs() < 0.02,
         "peak {peak} vs {peak_truth}"
     );
+}
+
+/// A camera sharpens its code after its tone curve (an unsharp mask on the
+/// sRGB code, amount 0.8, radius 1.2 px, as JPEG engines do; the truth is the
+/// modulation a sine of the chart's contrast reads through it: see
+/// `synth_code_sharpen`). The bend it gives the periods' shapes is not a tone
+/// curve: nothing is taken out, and the sharpening bars hold.
+#[test]
+fn a_sharpened_code_is_not_a_tone_curve_and_within_0_01() {
+    for variant in [7u64, 12] {
+        let mut shot = case("usm_peak1.15", variant);
+        shot.name = "code_usm".into();
+        shot.nuisance.usm = None;
+        shot.nuisance.code_sharpen = Some(CodeSharpen {
+            amount: 0.8,
+            radius_px: 1.2,
+        });
+        let m = measured(&shot, 100 + variant, MeasureOptions::default());
+        let (rms, e50, cm, cm_err) = scores(&shot, &m);
+        let fix = m.curves[0].tone_fix.as_ref();
+        eprintln!(
+            "code_usm v{variant}: RMS {rms:.4} MTF50 {e50:+.4} chart {cm:.4} ± {cm_err:.4}; tone used {:?} sharpening seen {:?}",
+            fix.map(|f| f.used),
+            fix.map(|f| f.sharpening_seen)
+        );
+        assert!(fix.is_none_or(|f| !f.used), "v{variant}: {fix:?}");
+        assert!(rms <= 0.01, "v{variant}: RMS {rms:.4}");
+        assert!(e50.abs() <= 0.01, "v{variant}: MTF50 off by {e50:+.4}");
+        assert!(
+            (cm / 0.8 - 1.0).abs() <= 0.005,
+            "v{variant}: chart modulation {cm:.4} (printed 0.8)"
+        );
+    }
 }
 
 #[test]
