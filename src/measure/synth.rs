@@ -417,8 +417,9 @@ pub fn wide_strip_shot() -> SynthShot {
 /// The shots of issue 15's nuisances, with exact truth: illumination 3:1 along
 /// the strip with 50 % vignetting, a keystoned linear sweep (one end 1.5× the
 /// other's height), unsharp-mask sharpening peaking near 1.15, a camera's
-/// picture style (an S-curve of strength 2 on top of sRGB), and RGB JPEG
-/// q75 with 4:2:0 chroma and noise. `variant` moves the strip, its size, turn
+/// picture style (an S-curve of strength 2 on top of sRGB; also under uneven
+/// light on paper), RGB JPEG q75 with 4:2:0 chroma and noise, and the sRGB
+/// code sharpened as a camera does. `variant` moves the strip, its size, turn
 /// and blur a little (0 is the set the report uses; tests use others).
 pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
     use super::law::LawKind;
@@ -533,6 +534,19 @@ pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
                 light_ratio: 2.0,
                 vignette_corner: 0.7,
                 paper_surround: true,
+                ..Nuisances::default()
+            },
+            ..base.clone()
+        },
+        SynthShot {
+            name: "code_usm0.8".into(),
+            // A camera's sharpening of its sRGB code (JPEG engines sharpen
+            // after the tone curve): not linear, and not a tone curve.
+            nuisance: Nuisances {
+                code_sharpen: Some(CodeSharpen {
+                    amount: 0.8,
+                    radius_px: 1.2,
+                }),
                 ..Nuisances::default()
             },
             ..base

@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use assert_cmd::Command;
-use sweepmtf::measure::synth::{CodeSharpen, SynthShot, nuisance_cases};
+use sweepmtf::measure::synth::{SynthShot, nuisance_cases};
 use sweepmtf::measure::{MeasureOptions, Measurement, measure_bytes, measure_decoded};
 use sweepmtf::photo::decode::decode_bytes;
 
@@ -299,13 +299,7 @@ fn unsharp_mask_peaking_near_1_15_within_0_01_and_never_clipped() {
 #[test]
 fn a_sharpened_code_is_not_a_tone_curve_and_within_0_01() {
     for variant in [7u64, 12] {
-        let mut shot = case("usm_peak1.15", variant);
-        shot.name = "code_usm".into();
-        shot.nuisance.usm = None;
-        shot.nuisance.code_sharpen = Some(CodeSharpen {
-            amount: 0.8,
-            radius_px: 1.2,
-        });
+        let shot = case("code_usm0.8", variant);
         let m = measured(&shot, 100 + variant, MeasureOptions::default());
         let (rms, e50, cm, cm_err) = scores(&shot, &m);
         let fix = m.curves[0].tone_fix.as_ref();
