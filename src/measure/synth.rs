@@ -12,9 +12,9 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 use super::law::PhaseLaw;
-pub use super::synth_code_sharpen::CodeSharpen;
 use crate::geometry::{Homography, Point, rect_corners};
 use crate::photo::linearise::linear_to_srgb;
+use crate::simulate::nuisance::Sharpen;
 use std::f64::consts::PI;
 use std::io::Cursor;
 
@@ -76,7 +76,7 @@ pub struct Nuisances {
     pub paper_surround: bool,
     /// A camera's unsharp mask on the code, after the picture style (see
     /// [`super::synth_code_sharpen`]; its truth assumes even light).
-    pub code_sharpen: Option<CodeSharpen>,
+    pub code_sharpen: Option<Sharpen>,
 }
 
 /// A picture style's S-curve of strength `k` on a code (0–1); `k` = 0 leaves it.
@@ -112,7 +112,8 @@ impl SynthShot {
             Some(cs) => {
                 let q = self.quad;
                 let angle = (q[1][1] - q[0][1]).atan2(q[1][0] - q[0][0]);
-                cs.truth(
+                super::synth_code_sharpen::truth(
+                    &cs,
                     f,
                     angle,
                     t,
@@ -234,7 +235,7 @@ impl SynthShot {
         }
         if let Some(cs) = self.nuisance.code_sharpen {
             for plane in &mut planes {
-                cs.apply(plane, self.width);
+                super::synth_code_sharpen::apply(&cs, plane, self.width);
             }
         }
         let codes: Vec<u8> = (0..lin.len())
@@ -543,7 +544,7 @@ pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
             // A camera's sharpening of its sRGB code (JPEG engines sharpen
             // after the tone curve): not linear, and not a tone curve.
             nuisance: Nuisances {
-                code_sharpen: Some(CodeSharpen {
+                code_sharpen: Some(Sharpen {
                     amount: 0.8,
                     radius_px: 1.2,
                 }),

@@ -1,5 +1,5 @@
 //! A camera's sharpening of the code for the reference renderer
-//! ([`super::synth`]): an unsharp mask on the 8-bit code's values (after the
+//! ([`super::synth`]): the simulator's unsharp mask ([`Sharpen`]) on the code (after the
 //! sRGB curve and any picture style), as a camera's JPEG engine sharpens,
 //! and the truth such a camera gives a sine chart.
 //!
@@ -14,121 +14,66 @@
 
 use super::synth::picture_style;
 use crate::photo::linearise::{linear_to_srgb, srgb_to_linear};
+use crate::simulate::nuisance::Sharpen;
 use std::f64::consts::PI;
 
-/// An unsharp mask on the code: out = c + amount·(c − G∗c), G a discrete
-/// Gaussian of standard deviation `radius_px` (half-width ⌈4σ⌉, normalised).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CodeSharpen {
-    /// Amount a (dimensionless).
-    pub amount: f64,
-    /// The Gaussian's standard deviation (pixels).
-    pub radius_px: f64,
+/// The modulation transfer a sine of contrast `contrast` about linear mean
+/// `mean` reads at `f` cycles/pixel in direction `angle` (radians), its
+/// linear transfer up to the code being `t_lin`, through sRGB, a picture
+/// style of strength `style` and the unsharp mask `mask` on the code (see
+/// the module text; the mask's gain at each harmonic is [`Sharpen::gain`]).
+pub fn truth(
+    mask: &Sharpen,
+    f: f64,
+    angle: f64,
+    t_lin: f64,
+    mean: f64,
+    contrast: f64,
+    style: f64,
+) -> f64 {
+    const N: usize = 256;
+    let (fx, fy) = (f * angle.cos(), f * angle.sin());
+    let code: Vec<f64> = (0..N)
+        .map(|i| {
+            let v = mean * (1.0 + contrast * t_lin * (2.0 * PI * i as f64 / N as f64).cos());
+            picture_style(linear_to_srgb(v.clamp(0.0, 1.0)), style)
+        })
+        .collect();
+    // Each harmonic of the code scaled by the mask's transfer at k·f.
+    let mut sharp = vec![0.0; N];
+    for h in 0..N / 2 {
+        let (mut a, mut b) = (0.0, 0.0);
+        for (i, c) in code.iter().enumerate() {
+            let ph = 2.0 * PI * (h * i) as f64 / N as f64;
+            a += c * ph.cos();
+            b += c * ph.sin();
+        }
+        let w = if h == 0 { 1.0 } else { 2.0 } / N as f64;
+        let gain = mask.gain(h as f64 * fx, h as f64 * fy);
+        for (i, s) in sharp.iter_mut().enumerate() {
+            let ph = 2.0 * PI * (h * i) as f64 / N as f64;
+            *s += gain * w * (a * ph.cos() + b * ph.sin());
+        }
+    }
+    // Decoded: its fundamental over its mean.
+    let (mut m, mut a, mut b) = (0.0, 0.0, 0.0);
+    for (i, c) in sharp.iter().enumerate() {
+        let v = srgb_to_linear(unstyle(c.clamp(0.0, 1.0), style));
+        let ph = 2.0 * PI * i as f64 / N as f64;
+        m += v;
+        a += v * ph.cos();
+        b += v * ph.sin();
+    }
+    2.0 * a.hypot(b) / m / contrast
 }
 
-impl CodeSharpen {
-    /// The discrete kernel's taps, from −⌈4σ⌉ to ⌈4σ⌉.
-    fn kernel(&self) -> Vec<f64> {
-        let r = (4.0 * self.radius_px).ceil().max(1.0) as i64;
-        let k: Vec<f64> = (-r..=r)
-            .map(|x| (-0.5 * (x as f64 / self.radius_px).powi(2)).exp())
-            .collect();
-        let sum: f64 = k.iter().sum();
-        k.into_iter().map(|v| v / sum).collect()
-    }
-
-    /// The kernel's transfer along one axis at `f` cycles/pixel.
-    fn axis_transfer(&self, k: &[f64], f: f64) -> f64 {
-        let r = (k.len() / 2) as f64;
-        k.iter()
-            .enumerate()
-            .map(|(i, w)| w * (2.0 * PI * f * (i as f64 - r)).cos())
-            .sum()
-    }
-
-    /// Sharpens a row-major plane of code values (0–1) in place: the blur
-    /// separable, edges held.
-    pub fn apply(&self, plane: &mut [f64], width: usize) {
-        let k = self.kernel();
-        let r = (k.len() / 2) as i64;
-        let height = plane.len() / width.max(1);
-        let blur_rows: Vec<f64> = (0..height * width)
-            .map(|i| {
-                let (y, x) = ((i / width) as i64, (i % width) as i64);
-                k.iter()
-                    .enumerate()
-                    .map(|(j, w)| {
-                        let xx = (x + j as i64 - r).clamp(0, width as i64 - 1);
-                        w * plane[(y * width as i64 + xx) as usize]
-                    })
-                    .sum()
-            })
-            .collect();
-        for i in 0..height * width {
-            let (y, x) = ((i / width) as i64, (i % width) as i64);
-            let blur: f64 = k
-                .iter()
-                .enumerate()
-                .map(|(j, w)| {
-                    let yy = (y + j as i64 - r).clamp(0, height as i64 - 1);
-                    w * blur_rows[(yy * width as i64 + x) as usize]
-                })
-                .sum();
-            plane[i] += self.amount * (plane[i] - blur);
-        }
-    }
-
-    /// The modulation transfer a sine of contrast `contrast` about linear
-    /// mean `mean` reads at `f` cycles/pixel in direction `angle` (radians),
-    /// its linear transfer up to the code being `t_lin`, through sRGB and a
-    /// picture style of strength `style` and this mask (see the module text).
-    pub fn truth(
-        &self,
-        f: f64,
-        angle: f64,
-        t_lin: f64,
-        mean: f64,
-        contrast: f64,
-        style: f64,
-    ) -> f64 {
-        const N: usize = 256;
-        let k = self.kernel();
-        let (fx, fy) = (f * angle.cos(), f * angle.sin());
-        let code: Vec<f64> = (0..N)
-            .map(|i| {
-                let v = mean * (1.0 + contrast * t_lin * (2.0 * PI * i as f64 / N as f64).cos());
-                picture_style(linear_to_srgb(v.clamp(0.0, 1.0)), style)
-            })
-            .collect();
-        // Each harmonic of the code scaled by the mask's transfer at k·f.
-        let mut sharp = vec![0.0; N];
-        for h in 0..N / 2 {
-            let (mut a, mut b) = (0.0, 0.0);
-            for (i, c) in code.iter().enumerate() {
-                let ph = 2.0 * PI * (h * i) as f64 / N as f64;
-                a += c * ph.cos();
-                b += c * ph.sin();
-            }
-            let w = if h == 0 { 1.0 } else { 2.0 } / N as f64;
-            let hf = h as f64;
-            let gain = 1.0
-                + self.amount
-                    * (1.0 - self.axis_transfer(&k, hf * fx) * self.axis_transfer(&k, hf * fy));
-            for (i, s) in sharp.iter_mut().enumerate() {
-                let ph = 2.0 * PI * (h * i) as f64 / N as f64;
-                *s += gain * w * (a * ph.cos() + b * ph.sin());
-            }
-        }
-        // Decoded: its fundamental over its mean.
-        let (mut m, mut a, mut b) = (0.0, 0.0, 0.0);
-        for (i, c) in sharp.iter().enumerate() {
-            let v = srgb_to_linear(unstyle(c.clamp(0.0, 1.0), style));
-            let ph = 2.0 * PI * i as f64 / N as f64;
-            m += v;
-            a += v * ph.cos();
-            b += v * ph.sin();
-        }
-        2.0 * a.hypot(b) / m / contrast
+/// Sharpens a row-major plane of code values (0–1) in place with `mask`
+/// ([`Sharpen::apply`], edges held).
+pub fn apply(mask: &Sharpen, plane: &mut [f64], width: usize) {
+    let mut p32: Vec<f32> = plane.iter().map(|&v| v as f32).collect();
+    mask.apply(&mut p32, width);
+    for (o, v) in plane.iter_mut().zip(p32) {
+        *o = v as f64;
     }
 }
 
@@ -149,11 +94,11 @@ mod tests {
     /// The truth against a sharpened sine rendered on the pixel grid: a
     /// plane of a pure sine in linear light (whole cycles across it, so the
     /// mask's edges do not matter in the middle), encoded, sharpened by
-    /// [`CodeSharpen::apply`], decoded, its fundamental over its mean read
+    /// [`apply`], decoded, its fundamental over its mean read
     /// by least squares in the middle rows.
     #[test]
     fn the_truth_matches_a_sharpened_plane() {
-        let s = CodeSharpen {
+        let s = Sharpen {
             amount: 0.8,
             radius_px: 1.2,
         };
@@ -169,7 +114,7 @@ mod tests {
                     picture_style(linear_to_srgb(v), style)
                 })
                 .collect();
-            s.apply(&mut plane, w);
+            apply(&s, &mut plane, w);
             let row = &plane[16 * w..17 * w];
             let (mut m, mut a, mut b) = (0.0, 0.0, 0.0);
             for (x, c) in row.iter().enumerate().skip(32).take(w - 64) {
@@ -180,7 +125,7 @@ mod tests {
                 b += v * ph.sin();
             }
             let read = 2.0 * a.hypot(b) / m / contrast;
-            let truth = s.truth(f, 0.0, t, mean, contrast, style);
+            let truth = truth(&s, f, 0.0, t, mean, contrast, style);
             assert!(
                 (read - truth).abs() < 1e-4,
                 "f {f} style {style}: read {read} truth {truth}"
