@@ -44,7 +44,10 @@ jpeg85, png, sharpen, keystone, distort, light, all, tone (a camera's
 picture style: a tanh S-curve of strength 1–2.5 on the sRGB code), camera
 (all and tone), tonelight (tone and light: the black level from the paper,
 session 23), codesharp (sRGB, the code sharpened; session 26), jpegcam
-(a picture style and the code sharpened after it, as camera JPEGs are). EXTRA="--tone file" passes options to `measure`;
+(a picture style and the code sharpened after it, as camera JPEGs are),
+linear (a linear sweep; session 27), keylin (a keystoned linear sweep,
+issue 15's bar), varied (strips 500–1400 px long, 30–150 px tall, turned
+up to ±15° or near vertical, either sweep, exposure 0.3–0.95). EXTRA="--tone file" passes options to `measure`;
 SHOW_TONE=1 prints the tone correction and its black level found; with
 KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay. Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
@@ -152,8 +155,13 @@ def reflectance(u, v, p):
     """The printed chart at (u, v) mm: the sweep strip on white paper."""
     L, h, f0, f1 = p["L"], p["h"], p["f0"], p["f1"]
     inside = (u >= 0) & (u <= L) & (v >= 0) & (v <= h)
-    k = math.log(f1 / f0) / L
-    ph = 2 * np.pi * f0 / k * (np.exp(k * np.clip(u, 0, L)) - 1)
+    uc = np.clip(u, 0, L)
+    if p["sweep"] == "lin":
+        # A linear sweep: the local frequency f0 + (f1 − f0)·u/L cycles/mm.
+        ph = 2 * np.pi * (f0 * uc + (f1 - f0) * uc * uc / (2 * L))
+    else:
+        k = math.log(f1 / f0) / L
+        ph = 2 * np.pi * f0 / k * (np.exp(k * uc) - 1)
     sweep = 0.5 * (1 + 0.8 * np.sin(ph))
     return np.where(inside, sweep, 1.0)
 
@@ -221,8 +229,12 @@ def code_sharpened(f, t_lin, p):
     fx, fy = f * math.cos(th), f * math.sin(th)
     # Where along the strip (chart mm) the local frequency is f, and its light.
     px_per_mm = p["len_px"] / p["L"]
-    k = math.log(p["f1"] / p["f0"]) / p["L"]
-    u = min(max(math.log(max(f * px_per_mm, 1e-9) / p["f0"]) / k, 0.0), p["L"])
+    if p["sweep"] == "lin":
+        u = (f * px_per_mm - p["f0"]) / (p["f1"] - p["f0"]) * p["L"]
+    else:
+        k = math.log(p["f1"] / p["f0"]) / p["L"]
+        u = math.log(max(f * px_per_mm, 1e-9) / p["f0"]) / k
+    u = min(max(u, 0.0), p["L"])
     _, hm = strip_geometry(p)
     x, y = apply_h(hm, u, p["h"] / 2)
     x, y = distort(x, y, p)
@@ -330,6 +342,7 @@ def draw(kind, rng):
         tone=0.0,
         code_amount=0.0,
         code_radius=1.0,
+        sweep="log",
     )
     # Chart frequencies chosen so the strip reaches ≈ 0.008 … 0.6 cy/px.
     px_per_mm = p["len_px"] / p["L"]
@@ -362,10 +375,36 @@ def draw(kind, rng):
         p["code_radius"] = u(0.6, 1.5)
     if kind == "jpegcam":
         p["tone"] = u(1.0, 2.5)
+    if kind in ("linear", "keylin"):
+        # Drawn last too. A linear sweep from 0.004–0.01 to 0.4–0.6 cy/px,
+        # as sineMTF-style charts print; keylin keystones it (issue 15's bar).
+        p["sweep"] = "lin"
+        p["f0"] = u(0.004, 0.01) * px_per_mm
+        p["f1"] = u(0.4, 0.6) * px_per_mm
+    if kind == "keylin":
+        p["keystone"] = u(1.2, 1.5) if u() < 0.5 else 1 / u(1.2, 1.5)
+    if kind == "varied":
+        # Geometry and exposure beyond the other kinds' narrow spread: short
+        # and long, thin and tall strips, turned up to ±15° or near vertical,
+        # either sweep, reaching 0.35–0.6 cy/px from 0.004–0.02.
+        p["len_px"] = u(500, 1400)
+        p["h_px"] = u(30, 150)
+        if u() < 0.3:
+            # Near vertical: short enough for the 900-px frame.
+            p["theta"] = math.radians(90 + u(-15, 15))
+            p["len_px"] = u(400, 700)
+            p["cy"] = H / 2
+        else:
+            p["theta"] = math.radians(u(-15, 15))
+        p["exposure"] = u(0.3, 0.95)
+        p["sweep"] = "lin" if u() < 0.5 else "log"
+        px_per_mm = p["len_px"] / p["L"]
+        p["f0"] = u(0.004, 0.02) * px_per_mm
+        p["f1"] = u(0.35, 0.6) * px_per_mm
     # Overrides for probing one shot: P_<name>=value (e.g. P_fmt=png, P_k1=0).
     for k, v in os.environ.items():
         if k.startswith("P_") and k[2:] in p:
-            p[k[2:]] = v if k[2:] == "fmt" else int(v) if k[2:] == "quality" else float(v)
+            p[k[2:]] = v if k[2:] in ("fmt", "sweep") else int(v) if k[2:] == "quality" else float(v)
     return p
 
 
@@ -450,6 +489,9 @@ def main():
                     for f in np.arange(0.002, 0.7, 0.002):
                         fh.write(f"{f:.4f},{truth(f, p):.6f}\n")
             tag = f"{kind} seed {seed} #{i}: θ {math.degrees(p['theta']):+.2f}° f/{p['fnum']:.1f} σ {p['sigma']:.2f} defocus {p['defocus']:.2f}"
+            if kind in ("linear", "keylin", "varied"):
+                px_per_mm = p["len_px"] / p["L"]
+                tag += f" {p['sweep']} {p['len_px']:.0f}×{p['h_px']:.0f} px {p['f0'] / px_per_mm:.3f}–{p['f1'] / px_per_mm:.2f} cy/px exp. {p['exposure']:.2f}"
             if s is None:
                 print(f"{tag}: FAILED {err}", flush=True)
                 continue

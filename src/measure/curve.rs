@@ -113,11 +113,11 @@ pub struct ChartModulation {
 /// is kept:
 /// - near: M0·(1 + b f + c f²) through the points up to max(2 f_lo, f_lo + 0.05)
 ///   cy/px that stay within 10 % of the first ones;
-/// - wide: ln M = ln M0 + b f + c f² + d f³ through those up to
-///   max(2 f_lo, f_lo + 0.15) cy/px within 30 %: the MTF is a product of
-///   factors, so its logarithm is a sum of smooth terms, and the cubic
-///   follows the strong fall of blur and diffusion and the rise of sharpening
-///   that bend a low-order polynomial in M itself.
+/// - wide: ln M = ln M0 + b f + c f² (+ d f³ where the points need it)
+///   through those up to max(2 f_lo, f_lo + 0.15) cy/px within 30 %: the MTF
+///   is a product of factors, so its logarithm is a sum of smooth terms, and
+///   the cubic follows the strong fall of blur and diffusion and the rise of
+///   sharpening that bend a low-order polynomial in M itself.
 ///
 /// A rising start (b > 0) is not physical (|OTF| ≤ OTF(0) for any PSF whose
 /// rise is even): the even form (in f², f⁴, …) is used then. Assuming an even
@@ -235,13 +235,21 @@ fn near_estimate(pts: &[&MtfPoint], f_lo: f64) -> Result<ChartModulation, String
     })
 }
 
-/// The wide estimate: ln M = ln M0 + b f + c f² + d f³ (or the even form)
-/// through the points within [`WIDE_MOVE`] of the first ones, up to
-/// max(2 f_lo, f_lo + 0.15) cy/px. A product of factors (lens, pixel,
-/// diffusion, sharpening) is a sum of logarithms, each smooth in f, so the
-/// cubic holds over a fall that bends a low-order polynomial in M itself:
-/// strong blur or diffusion, and the rise of sharpening. `None` with fewer
-/// than 7 points.
+/// The wide estimate: ln M = ln M0 + b f + c f² (+ d f³) (or the even forms
+/// in f², f⁴ (, f⁶)) through the points within [`WIDE_MOVE`] of the first
+/// ones, up to max(2 f_lo, f_lo + 0.15) cy/px. A product of factors (lens,
+/// pixel, diffusion, sharpening) is a sum of logarithms, each smooth in f.
+/// Near 0 the physics has diffraction's linear start and the even factors'
+/// f²; the three terms are kept unless the fourth is significant beyond
+/// [`MIN_TERM_SIGNIFICANCE`] of its own uncertainty (nested fits). The cubic
+/// follows what a low-order form cannot over this range, the strong fall of
+/// blur and diffusion and the rise of sharpening (whose series in f² has not
+/// converged by 0.15 cy/px: there it extrapolated within 0.22 % where an f⁴
+/// term read up to −0.7 %). Fitted always, the free cubic followed the
+/// points' slow, shared ripple (JPEG, noise through overlapping windows) and
+/// carried it to 0 several times over: on linear sweeps, whose lowest point
+/// lies near 0.045 cy/px, the chart modulation read −1.3…+0.6 %. `None`
+/// with fewer than 7 points.
 fn log_estimate(pts: &[&MtfPoint], f_lo: f64) -> Option<ChartModulation> {
     let pos: Vec<&MtfPoint> = pts.iter().copied().filter(|p| p.modulation > 0.0).collect();
     if pos.first()?.freq_cy_px > f_lo {
@@ -262,29 +270,48 @@ fn log_estimate(pts: &[&MtfPoint], f_lo: f64) -> Option<ChartModulation> {
             )
         })
         .collect();
-    let (fit, linear_start) =
-        match robust_fit(&data, |x| [1.0, x, x * x, x * x * x]).filter(|l| l.slope <= 0.0) {
-            Some(l) => (l, true),
-            None => (
-                robust_fit(&data, |x| {
-                    let x2 = x * x;
-                    [1.0, x2, x2 * x2, x2 * x2 * x2]
-                })?,
-                false,
-            ),
-        };
-    let disp = (fit.chi2 / fit.dof.max(1.0)).max(1.0);
-    let value = fit.m0.exp();
-    let err = value * (fit.var * disp).sqrt();
-    (value > 0.0 && value.is_finite() && err.is_finite()).then_some(ChartModulation {
-        value,
-        err,
-        f_lo,
-        f_hi: f_top,
-        linear_start,
-        slope_rel: if linear_start { fit.slope / f_top } else { 0.0 },
-    })
+    let three = match robust_fit(&data, |x| [1.0, x, x * x]).filter(|l| l.slope <= 0.0) {
+        Some(l) => Some((l, true)),
+        None => robust_fit(&data, |x| [1.0, x * x, x.powi(4)]).map(|l| (l, false)),
+    };
+    let four = match robust_fit(&data, |x| [1.0, x, x * x, x * x * x]).filter(|l| l.slope <= 0.0) {
+        Some(l) => Some((l, true)),
+        None => robust_fit(&data, |x| {
+            let x2 = x * x;
+            [1.0, x2, x2 * x2, x2 * x2 * x2]
+        })
+        .map(|l| (l, false)),
+    };
+    let estimate = |(fit, linear_start): (RobustFit, bool)| -> Option<ChartModulation> {
+        let disp = (fit.chi2 / fit.dof.max(1.0)).max(1.0);
+        let value = fit.m0.exp();
+        let err = value * (fit.var * disp).sqrt();
+        (value > 0.0 && value.is_finite() && err.is_finite()).then_some(ChartModulation {
+            value,
+            err,
+            f_lo,
+            f_hi: f_top,
+            linear_start,
+            slope_rel: if linear_start { fit.slope / f_top } else { 0.0 },
+        })
+    };
+    // Nested: the fourth term (f³, or f⁶ in the even form) is kept where the
+    // points need it, beyond MIN_TERM_SIGNIFICANCE of its own uncertainty
+    // (widened by the fit's dispersion); else the three terms.
+    let needs_four = four.is_some_and(|(f, _)| {
+        let disp = (f.chi2 / f.dof.max(1.0)).max(1.0);
+        f.last.abs() > MIN_TERM_SIGNIFICANCE * (f.last_var * disp).sqrt()
+    });
+    if needs_four || three.is_none() {
+        four.and_then(estimate)
+    } else {
+        three.and_then(estimate)
+    }
 }
+
+/// Significance (in its own standard deviations) beyond which the wide
+/// estimate's fourth term is kept.
+const MIN_TERM_SIGNIFICANCE: f64 = 3.0;
 
 /// Largest relative move of the modulation over the points the wide estimate fits.
 const WIDE_MOVE: f64 = 0.3;
@@ -298,6 +325,9 @@ struct RobustFit {
     m0: f64,
     slope: f64,
     var: f64,
+    /// The last basis function's coefficient and its variance.
+    last: f64,
+    last_var: f64,
     chi2: f64,
     dof: f64,
 }
@@ -312,7 +342,9 @@ fn robust_fit<const N: usize>(
     let mut tukey = vec![1.0f64; data.len()];
     let mut coef = [0.0f64; N];
     let mut cov00 = 0.0;
+    let mut cov_last = 0.0;
     let unit: [f64; N] = std::array::from_fn(|i| if i == 0 { 1.0 } else { 0.0 });
+    let unit_last: [f64; N] = std::array::from_fn(|i| if i == N - 1 { 1.0 } else { 0.0 });
     let model =
         |coef: &[f64; N], x: f64| -> f64 { basis(x).iter().zip(coef).map(|(b, c)| b * c).sum() };
     for iter in 0..20 {
@@ -331,6 +363,7 @@ fn robust_fit<const N: usize>(
         let new = crate::linalg::solve(m, r, 1e-300)?;
         // Variance of the intercept: first column of the inverse.
         cov00 = crate::linalg::solve(m, unit, 1e-300)?[0];
+        cov_last = crate::linalg::solve(m, unit_last, 1e-300)?[N - 1];
         let moved = (new[0] - coef[0]).abs();
         coef = new;
         let z: Vec<f64> = data
@@ -365,6 +398,8 @@ fn robust_fit<const N: usize>(
         m0: coef[0],
         slope: coef[1],
         var: cov00.max(0.0),
+        last: coef[N - 1],
+        last_var: cov_last.max(0.0),
         chi2,
         dof: (wsum - N as f64).max(1.0),
     })
@@ -464,9 +499,9 @@ mod tests {
     fn a_steeply_falling_curve_is_extrapolated_from_its_first_points_only() {
         // A blurry lens, Gaussian σ = 2 px: 17 % lost by 0.06 cy/px. A quadratic
         // in M through 0.01–0.06 cy/px lands 1.2 % high at 0; through the points
-        // within 10 % of the first ones (the near estimate), 0.3 %. The log
-        // cubic of the wide estimate is exact for a Gaussian, and its smaller
-        // uncertainty makes it the one kept.
+        // within 10 % of the first ones (the near estimate), 0.3 %. The wide
+        // estimate's three-term log form is exact for a Gaussian, and its
+        // smaller uncertainty makes it the one kept.
         let sigma: f64 = 2.0;
         let gauss = |f: f64| (-2.0 * std::f64::consts::PI.powi(2) * sigma * sigma * f * f).exp();
         let pts: Vec<MtfPoint> = curve(0.7, gauss)
@@ -480,6 +515,43 @@ mod tests {
         let a = extrapolate_chart_modulation(&pts, 0.0).unwrap();
         assert!(a.err < near.err && a.f_hi > 0.04, "{a:?} vs {near:?}");
         assert!((a.value / 0.7 - 1.0).abs() < 1e-4, "{}", a.value);
+    }
+
+    #[test]
+    fn a_linear_sweep_start_keeps_three_terms_through_a_shared_ripple() {
+        // A linear sweep's points: the first at 0.045 cy/px, 0.0035 apart;
+        // diffraction at f/5 on 4 µm pixels (cut-off 1.45 cy/px) × Gaussian
+        // σ 0.5 px, with the slow ±0.15 % ripple that overlapping windows
+        // share (period 0.08 cy/px). The fourth term is not significant: the
+        // three terms read 0.8 at −0.2 %; a free cubic carries the ripple to
+        // 0 at −1.3 % (both −0.02 % and 0.00 % without the ripple).
+        let diff = |f: f64| {
+            let x: f64 = f / 1.45;
+            2.0 / std::f64::consts::PI * (x.acos() - x * (1.0 - x * x).sqrt())
+        };
+        let k = 2.0 * std::f64::consts::PI.powi(2);
+        let m = |f: f64| {
+            0.8 * diff(f)
+                * (-k * 0.25 * f * f).exp()
+                * (1.0 + 0.0015 * (2.0 * std::f64::consts::PI * f / 0.08).sin())
+        };
+        let pts: Vec<MtfPoint> = (0..75)
+            .map(|i| {
+                let f = 0.045 + 0.0035 * i as f64;
+                MtfPoint {
+                    s: i as f64,
+                    freq_cy_px: f,
+                    freq_chart: f,
+                    modulation: m(f),
+                    mtf: m(f) / 0.8,
+                    mtf_err: 0.002,
+                    aliased: false,
+                }
+            })
+            .collect();
+        let a = extrapolate_chart_modulation(&pts, 0.0).unwrap();
+        assert!((a.value / 0.8 - 1.0).abs() < 3e-3, "{a:?}");
+        assert!(a.linear_start, "{a:?}");
     }
 
     #[test]

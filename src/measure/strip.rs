@@ -205,10 +205,9 @@ pub(super) fn measure_strip(
         let sine = SineFit {
             window_cycles: opts.window_cycles,
         };
-        let mods = grid
+        let mods = fits
             .iter()
-            .zip(&fits)
-            .filter_map(|(&s, f)| sine.point(s, f.as_ref()?))
+            .filter_map(|f| sine.point(f.as_ref()?))
             .collect();
         (mods, deviation_from_fits(&law, &grid, &fits))
     } else {
@@ -260,7 +259,7 @@ pub(super) fn measure_strip(
     let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
     let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles, s0, s1);
     let (mut m_chart, mut m_chart_err, mut source, slope_rel) =
-        normalise::chart_modulation(&points, s_min, contrast, channel, id)?;
+        normalise::chart_modulation(&points, s_min, opts.window_cycles, contrast, channel, id)?;
     if m_chart_err > super::MAX_CHART_REL_ERR * m_chart {
         return Err(Failure::Unreliable(format!(
             "{channel}/{id}: the modulation is lost in noise (chart modulation {m_chart:.3} ± {m_chart_err:.3})"
@@ -282,9 +281,22 @@ pub(super) fn measure_strip(
         let mean = prof.y.iter().sum::<f64>() / prof.y.len().max(1) as f64;
         let taken = surround_leak::Surround::read(planes, strip).and_then(|sur| {
             let leak_at = |s: f64| sur.leak_rel(slope_rel, strip, s, opts.margin, to_linear, mean);
-            surround_leak::take_out(&mut points, &mut m_chart, s_min, leak_at)
+            surround_leak::take_out(&mut points, s_min, leak_at)
         });
         if let Some(leak) = taken {
+            // Read again from the points as corrected: the light beyond the
+            // strip's ends lowers its first periods more than the rest.
+            match normalise::chart_modulation(
+                &points,
+                s_min,
+                opts.window_cycles,
+                contrast,
+                channel,
+                id,
+            ) {
+                Ok((m, e, src, _)) => (m_chart, m_chart_err, source) = (m, e, src),
+                Err(_) => m_chart *= 1.0 + leak,
+            }
             m_chart_err = m_chart_err.hypot(surround_leak::LEAK_REL_ERR * leak.abs() * m_chart);
             source = format!("{source}{}", surround_leak::source_note(leak));
         }
@@ -339,9 +351,16 @@ pub(super) fn measure_strip(
             // changes, each point uncertain: said, not hidden.
             Some(eps) => {
                 let share = tone_unseen::widen(&mut points, &prof, &law, eps, m_chart, |alt| {
-                    normalise::chart_modulation(alt, s_min, contrast, channel, id)
-                        .ok()
-                        .map(|c| c.0)
+                    normalise::chart_modulation(
+                        alt,
+                        s_min,
+                        opts.window_cycles,
+                        contrast,
+                        channel,
+                        id,
+                    )
+                    .ok()
+                    .map(|c| c.0)
                 });
                 // MTF50 where it was given: its uncertainty from the widened points.
                 if figures.mtf50_cy_px.is_some() {
