@@ -258,8 +258,10 @@ pub(super) fn measure_strip(
     // 4.9 % (simulated shots, strong blur) against 0.2 % without them.
     let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
     let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles, s0, s1);
-    let (mut m_chart, mut m_chart_err, mut source, slope_rel) =
-        normalise::chart_modulation(&points, s_min, opts.window_cycles, contrast, channel, id)?;
+    let read_chart = |pts: &[MtfPoint]| {
+        normalise::chart_modulation(pts, s_min, opts.window_cycles, contrast, channel, id)
+    };
+    let (mut m_chart, mut m_chart_err, mut source, slope_rel) = read_chart(&points)?;
     if m_chart_err > super::MAX_CHART_REL_ERR * m_chart {
         return Err(Failure::Unreliable(format!(
             "{channel}/{id}: the modulation is lost in noise (chart modulation {m_chart:.3} ± {m_chart_err:.3})"
@@ -286,14 +288,7 @@ pub(super) fn measure_strip(
         if let Some(leak) = taken {
             // Read again from the points as corrected: the light beyond the
             // strip's ends lowers its first periods more than the rest.
-            match normalise::chart_modulation(
-                &points,
-                s_min,
-                opts.window_cycles,
-                contrast,
-                channel,
-                id,
-            ) {
+            match read_chart(&points) {
                 Ok((m, e, src, _)) => (m_chart, m_chart_err, source) = (m, e, src),
                 Err(_) => m_chart *= 1.0 + leak,
             }
@@ -351,16 +346,7 @@ pub(super) fn measure_strip(
             // changes, each point uncertain: said, not hidden.
             Some(eps) => {
                 let share = tone_unseen::widen(&mut points, &prof, &law, eps, m_chart, |alt| {
-                    normalise::chart_modulation(
-                        alt,
-                        s_min,
-                        opts.window_cycles,
-                        contrast,
-                        channel,
-                        id,
-                    )
-                    .ok()
-                    .map(|c| c.0)
+                    read_chart(alt).ok().map(|c| c.0)
                 });
                 // MTF50 where it was given: its uncertainty from the widened points.
                 if figures.mtf50_cy_px.is_some() {
