@@ -454,7 +454,7 @@ fn plain_srgb_under_uneven_light_and_sharpening_is_not_given_a_tone() {
             nuisance: Nuisances {
                 light_ratio: 2.0,
                 vignette_corner: 0.5,
-                ..base.nuisance.clone()
+                ..base.nuisance
             },
             ..base
         };
