@@ -216,7 +216,7 @@ fn near_estimate(pts: &[&MtfPoint], f_lo: f64) -> Result<ChartModulation, String
     };
     // Neighbouring points share data, so the scatter rather than the claimed
     // uncertainty sets the variance where it is the larger.
-    let disp = (fit.chi2 / fit.dof.max(1.0)).max(1.0);
+    let disp = fit.dispersion();
     let value = fit.m0;
     if !(value > 0.0 && value.is_finite()) {
         return Err("the extrapolated chart modulation is not positive".into());
@@ -283,7 +283,7 @@ fn log_estimate(pts: &[&MtfPoint], f_lo: f64) -> Option<ChartModulation> {
         .map(|l| (l, false)),
     };
     let estimate = |(fit, linear_start): (RobustFit, bool)| -> Option<ChartModulation> {
-        let disp = (fit.chi2 / fit.dof.max(1.0)).max(1.0);
+        let disp = fit.dispersion();
         let value = fit.m0.exp();
         let err = value * (fit.var * disp).sqrt();
         (value > 0.0 && value.is_finite() && err.is_finite()).then_some(ChartModulation {
@@ -299,8 +299,7 @@ fn log_estimate(pts: &[&MtfPoint], f_lo: f64) -> Option<ChartModulation> {
     // points need it, beyond MIN_TERM_SIGNIFICANCE of its own uncertainty
     // (widened by the fit's dispersion); else the three terms.
     let needs_four = four.is_some_and(|(f, _)| {
-        let disp = (f.chi2 / f.dof.max(1.0)).max(1.0);
-        f.last.abs() > MIN_TERM_SIGNIFICANCE * (f.last_var * disp).sqrt()
+        f.last.abs() > MIN_TERM_SIGNIFICANCE * (f.last_var * f.dispersion()).sqrt()
     });
     if needs_four || three.is_none() {
         four.and_then(estimate)
@@ -330,6 +329,15 @@ struct RobustFit {
     last_var: f64,
     chi2: f64,
     dof: f64,
+}
+
+impl RobustFit {
+    /// The robust χ² per degree of freedom, at least 1: neighbouring points
+    /// share data, so the scatter rather than the claimed uncertainty sets the
+    /// variance where it is the larger.
+    fn dispersion(&self) -> f64 {
+        (self.chi2 / self.dof.max(1.0)).max(1.0)
+    }
 }
 
 /// Iteratively reweighted least squares of y on the three basis functions of x,
