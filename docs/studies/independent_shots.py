@@ -47,7 +47,13 @@ session 23), codesharp (sRGB, the code sharpened; session 26), jpegcam
 (a picture style and the code sharpened after it, as camera JPEGs are),
 linear (a linear sweep; session 27), keylin (a keystoned linear sweep,
 issue 15's bar), varied (strips 500–1400 px long, 30–150 px tall, turned
-up to ±15° or near vertical, either sweep, exposure 0.3–0.95). EXTRA="--tone file" passes options to `measure`;
+up to ±15° or near vertical, either sweep, exposure 0.3–0.95), bayer (an
+RGGB sensor: each pixel sees its own colour, noise per site, white balance,
+then a bilinear or Malvar–He–Cutler demosaic, with lateral CA of up to
+±1 px at the frame's corner in red and in blue; session 28; its truth is
+the luma MTF a sine chart defines through mosaic, demosaic, CA, sRGB and
+the JPEG's Y′, `bayer_truth`), bayerall (that with uneven light, the code
+sharpened and q75–92). EXTRA="--tone file" passes options to `measure`;
 SHOW_TONE=1 prints the tone correction and its black level found; with
 KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay. Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
@@ -112,6 +118,8 @@ def truth(f, p):
     th = p["theta"]
     fx, fy = f * math.cos(th), f * math.sin(th)
     t = float(otf_lens(np.array(f), p) * box(fx) * box(fy) * usm_transfer(fx, fy, p))
+    if p["bayer"]:
+        return bayer_truth(f, p)
     return code_sharpened(f, t, p) if p["code_amount"] > 0 else t
 
 
@@ -252,6 +260,91 @@ def code_sharpened(f, t_lin, p):
     return 2 * abs(out[1]) / abs(out[0]) / 0.8
 
 
+def cfa_masks(shape):
+    """RGGB site masks (R at even row and column, B at odd row and column)."""
+    yy, xx = np.mgrid[0 : shape[0], 0 : shape[1]]
+    r = (yy % 2 == 0) & (xx % 2 == 0)
+    b = (yy % 2 == 1) & (xx % 2 == 1)
+    return r, ~(r | b), b, (yy % 2 == 0)
+
+
+def demosaic(m, how):
+    """A white-balanced RGGB mosaic → R, G, B planes: bilinear (a camera's
+    fast path) or Malvar–He–Cutler's gradient-corrected 5×5 kernels (2004;
+    many camera ISPs and OpenCV's default)."""
+    from scipy.ndimage import convolve
+
+    r, g, b, even_row = cfa_masks(m.shape)
+    conv = lambda k: convolve(m, np.array(k, dtype=float), mode="mirror")
+    if how == "bilinear":
+        kg = np.array([[0, 1, 0], [1, 4, 1], [0, 1, 0]]) / 4.0
+        krb = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]]) / 4.0
+        G = convolve(m * g, kg, mode="mirror")
+        R = convolve(m * r, krb, mode="mirror")
+        B = convolve(m * b, krb, mode="mirror")
+        return R, G, B
+    kg = np.array([[0, 0, -1, 0, 0], [0, 0, 2, 0, 0], [-1, 2, 4, 2, -1], [0, 0, 2, 0, 0], [0, 0, -1, 0, 0]]) / 8.0
+    krow = np.array([[0, 0, 0.5, 0, 0], [0, -1, 0, -1, 0], [-1, 4, 5, 4, -1], [0, -1, 0, -1, 0], [0, 0, 0.5, 0, 0]]) / 8.0
+    kdiag = np.array([[0, 0, -1.5, 0, 0], [0, 2, 0, 2, 0], [-1.5, 0, 6, 0, -1.5], [0, 2, 0, 2, 0], [0, 0, -1.5, 0, 0]]) / 8.0
+    cg, crow, ccol, cdiag = conv(kg), conv(krow), conv(krow.T), conv(kdiag)
+    G = np.where(g, m, cg)
+    # R: at G sites of R rows its neighbours sit left and right (krow), at G
+    # sites of B rows above and below (kcol), at B sites diagonally.
+    R = np.where(r, m, np.where(g & even_row, crow, np.where(g, ccol, cdiag)))
+    B = np.where(b, m, np.where(g & ~even_row, crow, np.where(g, ccol, cdiag)))
+    return R, G, B
+
+
+def bayer_truth(f, p):
+    """The luma MTF a sine chart defines through the mosaic, the demosaic and
+    lateral chromatic aberration: a noise-free pure sine of the presampling
+    transfer at the light where the strip has local frequency f, each colour
+    displaced by its CA there, mosaicked, demosaicked, sRGB-encoded, mixed to
+    the JPEG's Y′ (0.299, 0.587, 0.114) and decoded; the least-squares
+    fundamental (beside its harmonics and the CFA's aliases at +½ cy/px) over
+    its mean, over the printed 0.8."""
+    th = p["theta"]
+    fx, fy = f * math.cos(th), f * math.sin(th)
+    t = float(otf_lens(np.array(f), p) * box(fx) * box(fy))
+    px_per_mm = p["len_px"] / p["L"]
+    if p["sweep"] == "lin":
+        u = (f * px_per_mm - p["f0"]) / (p["f1"] - p["f0"]) * p["L"]
+    else:
+        k = math.log(p["f1"] / p["f0"]) / p["L"]
+        u = math.log(max(f * px_per_mm, 1e-9) / p["f0"]) / k
+    u = min(max(u, 0.0), p["L"])
+    _, hm = strip_geometry(p)
+    x0, y0 = apply_h(hm, u, p["h"] / 2)
+    ell = float(light_at(np.array(x0), np.array(y0), p))
+    # The chain is periodic in 2 px, so its response to the sine is the sine's
+    # fundamental plus aliases at +½ cy/px in x, y or both, and harmonics.
+    # Stepping the sine's phase in 16 steps and taking the first Fourier
+    # coefficient over them keeps the first harmonic and its aliases; times
+    # e^{−i2πf·x} and averaged over a 2×2 block, the aliases (±1 patterns)
+    # cancel and the fundamental stays, exactly, at any frequency and angle.
+    n, steps = 12, 16
+    yy, xx = np.mgrid[0:n, 0:n].astype(float)
+    r, g, b, _ = cfa_masks((n, n))
+    c0 = np.zeros((2, 2))
+    c1 = np.zeros((2, 2), dtype=complex)
+    for j in range(steps):
+        ph0 = 2 * np.pi * j / steps
+        m = np.empty((n, n))
+        for mask, eps in ((r, p["ca_r"]), (g, 0.0), (b, p["ca_b"])):
+            # Lateral CA: this colour's image is magnified by (1 + eps) about
+            # the frame's centre, so here it is displaced by eps·(x − centre).
+            dx, dy = eps * (x0 - W / 2), eps * (y0 - H / 2)
+            v = ell * 0.5 * (1 + 0.8 * t * np.cos(2 * np.pi * (fx * (xx - dx) + fy * (yy - dy)) + ph0))
+            m[mask] = v[mask]
+        R, G, B = demosaic(m, p["bayer"])
+        ypr = 0.299 * encode(R, p) + 0.587 * encode(G, p) + 0.114 * encode(B, p)
+        lin = decode(ypr, p)[4:6, 4:6]
+        c0 += lin / steps
+        c1 += lin * np.exp(-1j * ph0) * 2 / steps
+    fund = np.mean(c1 * np.exp(-2j * np.pi * (fx * xx[4:6, 4:6] + fy * yy[4:6, 4:6])))
+    return abs(fund) / np.mean(c0) / 0.8
+
+
 def render(p, rng):
     """The 8-bit sRGB frame (H×W×3) and the strip's corners in the image."""
     L, h = p["L"], p["h"]
@@ -280,19 +373,44 @@ def render(p, rng):
     fr = np.sqrt(fy[:, None] ** 2 + fx[None, :] ** 2)
     b = np.fft.irfft2(np.fft.rfft2(b) * otf_lens(fr, p), s=b.shape)[pad:-pad, pad:-pad]
     img[max(0, y0 - 64 * S) : min(H * S, y1 + 64 * S)] = b
-    # The pixel aperture: the mean of its S×S samples.
-    refl = img.reshape(H, S, W, S).mean(axis=(1, 3))
     # Light: gradient × vignetting × tint; exposure so white paper peaks at p["exposure"].
     yy, xx = np.mgrid[0:H, 0:W]
     light = light_at(xx, yy, p)
     tint = np.array([1.0, 0.8, 0.55])
-    lin = refl[..., None] * light[..., None] * tint[None, None, :]
-    # Sensor: Poisson shot noise and read noise in electrons, full well 9000.
     fw = 9000.0
-    e = rng.poisson(np.clip(lin, 0, None) * fw).astype(np.float64) + rng.normal(0, 3.0, lin.shape)
-    lin = e / fw
-    # White balance (the camera neutralises the tint).
-    lin = lin / tint[None, None, :]
+    if p["bayer"]:
+        # Lateral CA: red and blue images magnified by (1 + eps) about the
+        # centre (resampled by cubic spline at 4× supersampling); each pixel
+        # of the RGGB mosaic sees its own colour; noise per site; white
+        # balance; demosaic.
+        from scipy.ndimage import map_coordinates
+
+        lo, hi = max(0, y0 - 64 * S), min(H * S, y1 + 64 * S)
+        by, bx = np.mgrid[lo:hi, 0 : W * S].astype(float)
+        r, g, b, _ = cfa_masks((H, W))
+        m = np.zeros((H, W))
+        for c, (mask, eps) in enumerate(((r, p["ca_r"]), (g, 0.0), (b, p["ca_b"]))):
+            plane = img
+            if eps != 0:
+                plane = img.copy()
+                sx = (W / 2 + ((bx + 0.5) / S - W / 2) / (1 + eps)) * S - 0.5
+                sy = (H / 2 + ((by + 0.5) / S - H / 2) / (1 + eps)) * S - 0.5
+                plane[lo:hi] = map_coordinates(img, [sy, sx], order=3, mode="nearest")
+            refl = plane.reshape(H, S, W, S).mean(axis=(1, 3))
+            m[mask] = (refl * light * tint[c])[mask]
+        del by, bx
+        e = rng.poisson(np.clip(m, 0, None) * fw).astype(np.float64) + rng.normal(0, 3.0, m.shape)
+        gain = np.where(r, tint[0], np.where(b, tint[2], tint[1]))
+        lin = np.stack(demosaic(e / fw / gain, p["bayer"]), axis=-1)
+    else:
+        # The pixel aperture: the mean of its S×S samples.
+        refl = img.reshape(H, S, W, S).mean(axis=(1, 3))
+        lin = refl[..., None] * light[..., None] * tint[None, None, :]
+        # Sensor: Poisson shot noise and read noise in electrons, full well 9000.
+        e = rng.poisson(np.clip(lin, 0, None) * fw).astype(np.float64) + rng.normal(0, 3.0, lin.shape)
+        lin = e / fw
+        # White balance (the camera neutralises the tint).
+        lin = lin / tint[None, None, :]
     # Unsharp mask in linear light (separable discrete Gaussian).
     if p["amount"] > 0:
         x, k = usm_kernel(p["radius"])
@@ -343,6 +461,9 @@ def draw(kind, rng):
         code_amount=0.0,
         code_radius=1.0,
         sweep="log",
+        bayer="",
+        ca_r=0.0,
+        ca_b=0.0,
     )
     # Chart frequencies chosen so the strip reaches ≈ 0.008 … 0.6 cy/px.
     px_per_mm = p["len_px"] / p["L"]
@@ -401,10 +522,26 @@ def draw(kind, rng):
         px_per_mm = p["len_px"] / p["L"]
         p["f0"] = u(0.004, 0.02) * px_per_mm
         p["f1"] = u(0.35, 0.6) * px_per_mm
+    if kind in ("bayer", "bayerall"):
+        # Drawn last too. An RGGB sensor demosaicked bilinearly or by
+        # Malvar–He–Cutler, with lateral CA of up to ±1 px at the frame's
+        # corner in red and in blue, each its own.
+        p["bayer"] = "bilinear" if u() < 0.5 else "mhc"
+        rn = math.hypot(W, H) / 2
+        p["ca_r"] = u(-1, 1) / rn
+        p["ca_b"] = u(-1, 1) / rn
+    if kind == "bayerall":
+        # And the rest of a camera: uneven light, sharpening of the code, q75–92.
+        p["vignette"] = 0.5
+        p["gradient"] = u(0.3, 0.5)
+        p["grad_dir"] = math.atan2(math.sin(p["theta"]), math.cos(p["theta"])) + (0 if u() < 0.5 else math.pi)
+        p["code_amount"] = u(0.3, 1.0)
+        p["code_radius"] = u(0.6, 1.5)
+        p["quality"] = int(u(75, 92))
     # Overrides for probing one shot: P_<name>=value (e.g. P_fmt=png, P_k1=0).
     for k, v in os.environ.items():
         if k.startswith("P_") and k[2:] in p:
-            p[k[2:]] = v if k[2:] in ("fmt", "sweep") else int(v) if k[2:] == "quality" else float(v)
+            p[k[2:]] = v if k[2:] in ("fmt", "sweep", "bayer") else int(v) if k[2:] == "quality" else float(v)
     return p
 
 
@@ -489,6 +626,8 @@ def main():
                     for f in np.arange(0.002, 0.7, 0.002):
                         fh.write(f"{f:.4f},{truth(f, p):.6f}\n")
             tag = f"{kind} seed {seed} #{i}: θ {math.degrees(p['theta']):+.2f}° f/{p['fnum']:.1f} σ {p['sigma']:.2f} defocus {p['defocus']:.2f}"
+            if p["bayer"]:
+                tag += f" {p['bayer']} CA R {p['ca_r'] * math.hypot(W, H) / 2:+.2f} B {p['ca_b'] * math.hypot(W, H) / 2:+.2f} px"
             if kind in ("linear", "keylin", "varied"):
                 px_per_mm = p["len_px"] / p["L"]
                 tag += f" {p['sweep']} {p['len_px']:.0f}×{p['h_px']:.0f} px {p['f0'] / px_per_mm:.3f}–{p['f1'] / px_per_mm:.2f} cy/px exp. {p['exposure']:.2f}"

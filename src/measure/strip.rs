@@ -61,6 +61,12 @@ pub(super) fn measure_strip(
         )));
     }
     let mut prof = bin_planes(planes, strip, bin_opts);
+    // The bins' pixel-parity patterns, set aside until the law is found
+    // (its fits do without them, as before) and then used by the modulation
+    // fits only where the strip shows a CFA's aliases. A single colour's
+    // curve keeps its aliases: they are the colour moiré `moire` reads from
+    // red and blue apart.
+    let parity = std::mem::take(&mut prof.parity);
     if prof.s.len() < 20 {
         return Err(Failure::TooSmall(format!(
             "only {} bins fall inside the region",
@@ -187,6 +193,12 @@ pub(super) fn measure_strip(
         f.black = tone_black::find(&prof, &paper, &law, f);
         if let Some(b) = &f.black {
             tone_black::apply(b, &mut prof);
+        }
+    }
+    if !matches!(channel, "r" | "g" | "b") && parity.len() == prof.s.len() {
+        prof.parity = parity;
+        if !super::estimate::fit::cfa_aliases_seen(&prof, &law, opts.window_cycles) {
+            prof.parity.clear();
         }
     }
     let grid = output_grid(&law, prof.s[0], prof.s[prof.s.len() - 1]);

@@ -19,6 +19,7 @@ mod chart_mtf;
 mod chart_output;
 mod chart_sinemtf;
 mod colour_moire;
+mod demosaic_luma;
 mod exif_jpeg;
 mod fuzz_slice;
 mod gui_api;

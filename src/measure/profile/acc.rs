@@ -28,6 +28,9 @@ pub(super) struct BinAcc {
     pub(super) rsum: f64,
     pub(super) n: u32,
     pub(super) rn: u32,
+    /// Sums of the pixel-parity patterns (−1)^x, (−1)^y, (−1)^(x+y) over
+    /// the bin's samples (exact integers, whatever the order).
+    pub(super) parity: [i64; 3],
     /// The largest samples, descending (−∞ while unfilled); the first
     /// [`EXTREMES`] are the bin's.
     pub(super) hi: [f32; LANES],
@@ -46,6 +49,7 @@ impl Default for BinAcc {
             rsum: 0.0,
             n: 0,
             rn: 0,
+            parity: [0; 3],
             hi: [f32::NEG_INFINITY; LANES],
             lo: [f32::INFINITY; LANES],
         }
@@ -65,6 +69,43 @@ fn fmin(a: f32, b: f32) -> f32 {
 }
 
 impl BinAcc {
+    /// Adds the parity patterns of samples `q .. e` of a line starting at
+    /// `start` (one pixel a sample): along the line one coordinate's sign
+    /// alternates, so a run sums to its first sign when its length is odd and
+    /// to 0 otherwise; the other coordinate's sign is the line's.
+    #[inline(always)]
+    pub(super) fn add_parity_run(&mut self, start: super::region::LineStart, q: usize, e: usize) {
+        let len = (e - q) as i64;
+        let (alt0, fixed) = if start.along_x {
+            (start.x + q, start.y)
+        } else {
+            (start.y + q, start.x)
+        };
+        let alt = if len % 2 == 1 {
+            super::parity_sign(alt0)
+        } else {
+            0
+        };
+        let f = super::parity_sign(fixed);
+        let (sx, sy) = if start.along_x {
+            (alt, f * len)
+        } else {
+            (f * len, alt)
+        };
+        self.parity[0] += sx;
+        self.parity[1] += sy;
+        self.parity[2] += f * alt;
+    }
+
+    /// Adds one sample's parity patterns, at photo pixel (x, y).
+    #[inline(always)]
+    pub(super) fn add_parity(&mut self, x: usize, y: usize) {
+        let (px, py) = (super::parity_sign(x), super::parity_sign(y));
+        self.parity[0] += px;
+        self.parity[1] += py;
+        self.parity[2] += px * py;
+    }
+
     /// The bin's mean and its 3σ clipping distance (plus a small floor) for
     /// the robust mean: (mean, limit).
     pub(super) fn clip_limits(&self) -> (f64, f64) {
@@ -216,9 +257,14 @@ pub(super) fn robust_from_extremes(acc: &mut [BinAcc]) -> Vec<(usize, f64, f64)>
 
 /// Appends the non-empty bins of `acc` to `prof`: each bin's mean sample
 /// position, its variance, and its robust mean (the plain mean for bins of
-/// fewer than 4 samples).
-pub(super) fn finish(acc: &[BinAcc], prof: &mut Profile) {
+/// fewer than 4 samples); with `parity`, each bin's mean pixel-parity
+/// patterns too.
+pub(super) fn finish(acc: &[BinAcc], prof: &mut Profile, parity: bool) {
     for a in acc {
+        if parity && a.n > 0 {
+            let c = a.n as f64;
+            prof.parity.push(a.parity.map(|p| p as f64 / c));
+        }
         if a.n == 0 {
             continue;
         }

@@ -54,13 +54,14 @@ pub(super) fn bin_through_lens(
         .map(|(b0, b1, acc)| {
             let mut count = [0usize; 3];
             let reach = [(b0 as f64 * bin - hair, b1 as f64 * bin + hair)];
-            map.visit(planes, &tiles, &reach, |s, v| {
+            map.visit(planes, &tiles, &reach, |s, v, (x, y)| {
                 let b = bin_of(s);
                 if b >= b0 && b < b1 {
                     count[0] += 1;
                     count[1] += (v >= clip_level) as usize;
                     count[2] += (v <= 0.0) as usize;
                     acc[b - b0].add(s, v);
+                    acc[b - b0].add_parity(x, y);
                 }
             });
             count
@@ -83,7 +84,7 @@ pub(super) fn bin_through_lens(
             .iter()
             .map(|r| (r.0 as f64 * bin - hair, (r.0 + 1) as f64 * bin + hair))
             .collect();
-        map.visit(planes, &tiles, &reach, |s, v| {
+        map.visit(planes, &tiles, &reach, |s, v, _| {
             let b = bin_of(s);
             if let Some((mu, lim)) = keep[b]
                 && (v as f64 - mu).abs() <= lim
@@ -93,7 +94,7 @@ pub(super) fn bin_through_lens(
             }
         });
     }
-    super::acc::finish(&acc, &mut prof);
+    super::acc::finish(&acc, &mut prof, super::wants_parity(planes));
     prof
 }
 
@@ -154,10 +155,10 @@ impl Map<'_> {
         }
     }
 
-    /// Calls f(s, value) for every sample inside the binned part of the strip
+    /// Calls f(s, value, photo pixel) for every sample inside the binned part of the strip
     /// in the tiles whose s-range meets one of `reach` (sorted, disjoint
     /// s-intervals), tile by tile in order.
-    fn visit<F: FnMut(f64, f32)>(
+    fn visit<F: FnMut(f64, f32, (usize, usize))>(
         &self,
         planes: &[PlaneRef],
         tiles: &[Tile],
@@ -182,9 +183,13 @@ impl Map<'_> {
                 let row = plane.values(j, i0, &mut buf[..i1 - i0]);
                 let s_run = &mut s_buf[..row.len()];
                 self.strip_row(ox + i0 as f64 * sx, sx, y, s_run);
-                for (&s, &v) in s_run.iter().zip(row) {
+                let (px0, py) = (
+                    plane.offset.0 + i0 * plane.step.0,
+                    plane.offset.1 + j * plane.step.1,
+                );
+                for (k, (&s, &v)) in s_run.iter().zip(row).enumerate() {
                     if !s.is_nan() {
-                        f(s, v);
+                        f(s, v, (px0 + k * plane.step.0, py));
                     }
                 }
             }

@@ -171,7 +171,7 @@ struct EachSample<F>(F);
 
 impl<F: FnMut(usize, f64, f32)> LineSink for EachSample<F> {
     #[inline(always)]
-    fn line(&mut self, b: &[u32], s: &[f64], v: &[f32]) {
+    fn line(&mut self, b: &[u32], s: &[f64], v: &[f32], _: LineStart) {
         for ((&b, &s), &v) in b.iter().zip(s).zip(v) {
             (self.0)(b as usize, s, v);
         }
@@ -227,7 +227,8 @@ impl Region<'_> {
                         let x = ox + (i0 + k) as f64 * sx;
                         *s = (m[0] * x + ns0) / (m[6] * x + w0);
                     }
-                    hand_out_line(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                    let start = LineStart::of(&plane, i0, j, true);
+                    hand_out_line(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, start, f);
                 }
             }
             return;
@@ -262,21 +263,29 @@ impl Region<'_> {
                         s_buf[q] = (a0 + ns[q]) / (a6 + w[q]);
                         v_buf[q] = tile[q][k - c0];
                     }
-                    hand_out_line(nr, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                    let start = LineStart::of(&plane, k, band.first, false);
+                    hand_out_line(nr, &s_buf, &mut b_buf, &v_buf, inv_bin, last, start, f);
                     continue;
                 }
-                // The rows whose range holds column k, packed.
+                // The rows whose range holds column k, packed (one run of
+                // rows: the region is convex).
                 let mut n = 0;
+                let mut first = usize::MAX;
                 for (dj, &(i0, i1)) in rows.iter().enumerate() {
                     ns_c[n] = ns[dj];
                     w_c[n] = w[dj];
                     v_buf[n] = tile[dj][k - c0];
-                    n += (i0 <= k && k < i1) as usize;
+                    let holds = i0 <= k && k < i1;
+                    if holds && first == usize::MAX {
+                        first = dj;
+                    }
+                    n += holds as usize;
                 }
                 for q in 0..n {
                     s_buf[q] = (a0 + ns_c[q]) / (a6 + w_c[q]);
                 }
-                hand_out_line(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, f);
+                let start = LineStart::of(&plane, k, band.first + first.min(nr), false);
+                hand_out_line(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, start, f);
             }
         }
     }
@@ -285,6 +294,7 @@ impl Region<'_> {
 /// Hands the first `n` samples of one line (positions `s`, values `v`) to
 /// `f` with their bins (`b` is scratch for them).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn hand_out_line<F: LineSink>(
     n: usize,
     s: &[f64; TILE],
@@ -292,20 +302,44 @@ fn hand_out_line<F: LineSink>(
     v: &[f32; TILE],
     inv_bin: f64,
     last: f64,
+    start: LineStart,
     f: &mut F,
 ) {
     for q in 0..n {
         b[q] = Region::bin_index(s[q], inv_bin, last);
     }
-    f.line(&b[..n], &s[..n], &v[..n]);
+    f.line(&b[..n], &s[..n], &v[..n], start);
+}
+
+/// Where a line of samples starts in the photo and which way it runs: its
+/// first sample's pixel (x, y) and whether it runs along x (a row, one pixel
+/// a sample) or along y (a column, one pixel a sample, contiguous rows).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LineStart {
+    pub(super) x: usize,
+    pub(super) y: usize,
+    pub(super) along_x: bool,
+}
+
+impl LineStart {
+    /// The line from sample (i, j) of `plane`, along its rows or its columns.
+    #[inline(always)]
+    fn of(plane: &PlaneRef, i: usize, j: usize, along_x: bool) -> LineStart {
+        LineStart {
+            x: plane.offset.0 + i * plane.step.0,
+            y: plane.offset.1 + j * plane.step.1,
+            along_x,
+        }
+    }
 }
 
 /// What takes the samples of [`Region::visit_band_lines`]: one line of
 /// samples at a time (down a column or along a row), in which consecutive
 /// samples mostly share a bin.
 pub(super) trait LineSink {
-    /// Takes a line's samples: their bins `b`, positions `s` (strip units) and linear values `v`.
-    fn line(&mut self, b: &[u32], s: &[f64], v: &[f32]);
+    /// Takes a line's samples: their bins `b`, positions `s` (strip units),
+    /// linear values `v`, and where the line starts in the photo.
+    fn line(&mut self, b: &[u32], s: &[f64], v: &[f32], start: LineStart);
 }
 
 /// Rows and columns of a tile in [`Region::visit_band_lines`] (and of the lens
