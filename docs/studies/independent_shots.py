@@ -299,8 +299,9 @@ def bayer_truth(f, p):
     """The luma MTF a sine chart defines through the mosaic, the demosaic and
     lateral chromatic aberration: a noise-free pure sine of the presampling
     transfer at the light where the strip has local frequency f, each colour
-    displaced by its CA there, mosaicked, demosaicked, sRGB-encoded, mixed to
-    the JPEG's Y′ (0.299, 0.587, 0.114) and decoded; the least-squares
+    displaced by its CA there, mosaicked, demosaicked, sRGB-encoded (each
+    code sharpened where the camera sharpens it), mixed to the JPEG's Y′
+    (0.299, 0.587, 0.114) and decoded; the least-squares
     fundamental (beside its harmonics and the CFA's aliases at +½ cy/px) over
     its mean, over the printed 0.8."""
     th = p["theta"]
@@ -322,10 +323,13 @@ def bayer_truth(f, p):
     # coefficient over them keeps the first harmonic and its aliases; times
     # e^{−i2πf·x} and averaged over a 2×2 block, the aliases (±1 patterns)
     # cancel and the fundamental stays, exactly, at any frequency and angle.
-    n, steps = 12, 16
+    n, steps = 32, 16
     yy, xx = np.mgrid[0:n, 0:n].astype(float)
     r, g, b, _ = cfa_masks((n, n))
-    c0 = np.zeros((2, 2))
+    # The 2×2 block read: far enough inside for the demosaic's and the
+    # sharpening's kernels (reflected edges do not reach it).
+    c0 = (slice(n // 2 - 1, n // 2 + 1),) * 2
+    dc = np.zeros((2, 2))
     c1 = np.zeros((2, 2), dtype=complex)
     for j in range(steps):
         ph0 = 2 * np.pi * j / steps
@@ -336,13 +340,20 @@ def bayer_truth(f, p):
             dx, dy = eps * (x0 - W / 2), eps * (y0 - H / 2)
             v = ell * 0.5 * (1 + 0.8 * t * np.cos(2 * np.pi * (fx * (xx - dx) + fy * (yy - dy)) + ph0))
             m[mask] = v[mask]
-        R, G, B = demosaic(m, p["bayer"])
-        ypr = 0.299 * encode(R, p) + 0.587 * encode(G, p) + 0.114 * encode(B, p)
-        lin = decode(ypr, p)[4:6, 4:6]
-        c0 += lin / steps
+        codes = [encode(c, p) for c in demosaic(m, p["bayer"])]
+        if p["code_amount"] > 0:
+            # The camera's sharpening of each channel's code, as `render` does.
+            from scipy.ndimage import convolve1d
+
+            _, kern = usm_kernel(p["code_radius"])
+            blur = lambda c: convolve1d(convolve1d(c, kern, axis=0, mode="nearest"), kern, axis=1, mode="nearest")
+            codes = [c + p["code_amount"] * (c - blur(c)) for c in codes]
+        ypr = 0.299 * codes[0] + 0.587 * codes[1] + 0.114 * codes[2]
+        lin = decode(ypr, p)[c0]
+        dc += lin / steps
         c1 += lin * np.exp(-1j * ph0) * 2 / steps
-    fund = np.mean(c1 * np.exp(-2j * np.pi * (fx * xx[4:6, 4:6] + fy * yy[4:6, 4:6])))
-    return abs(fund) / np.mean(c0) / 0.8
+    fund = np.mean(c1 * np.exp(-2j * np.pi * (fx * xx[c0] + fy * yy[c0])))
+    return abs(fund) / np.mean(dc) / 0.8
 
 
 def render(p, rng):

@@ -11,8 +11,9 @@
 //! 0.2126·T_RB + 0.7152·T_G + 0.0722·T_RB; the aliases are not MTF. Along a
 //! pixel axis every bin of the profile holds pixels of one parity, the alias
 //! reaches the profile at ½ − f cy/px, and a sine fit that does not model it
-//! read +0.03 at 0.3 cy/px (RMS 0.006–0.014 on the independent camera's
-//! near-axis shots; `docs/studies/independent_shots.py … bayer`).
+//! read up to +0.044 near 0.27 cy/px here (RMS 0.0102 / 0.0115 / 0.0025 /
+//! 0.0013 turned 0° / 0.4° / 1.5° / 3°; 0.006–0.014 on the independent
+//! camera's near-axis shots, `docs/studies/independent_shots.py … bayer`).
 
 use std::f64::consts::PI;
 use sweepmtf::measure::{MeasureOptions, measure_decoded};

@@ -48,9 +48,8 @@ pub struct LocalFit {
     pub phase_shift: f64,
     /// Cycles actually covered by the window's data.
     pub cycles: f64,
-    /// Σ c²/var c over the fit's pixel-parity terms (a CFA's aliases), and
-    /// how many there were (0 where none entered the model).
-    pub alias_chi2: (f64, usize),
+    /// The fit's pixel-parity terms (a CFA's aliases), where any entered the model.
+    pub alias: AliasTerms,
 }
 
 impl LocalFit {
@@ -335,10 +334,10 @@ fn fit_window<const M: usize>(prof: &Profile, table: &PhaseTable, w: &Window) ->
     let a2 = c[2] * c[2] + c[3] * c[3];
     let amp = (a2 - va - vb).max(0.0).sqrt();
     let theta = c[3].atan2(c[2]);
-    let alias_chi2 = (
-        (N..M).map(|q| c[q] * c[q] / cov(q).max(1e-300)).sum(),
-        M - N,
-    );
+    let alias = AliasTerms {
+        chi2: (N..M).map(|q| c[q] * c[q] / cov(q).max(1e-300)).sum(),
+        dof: M - N,
+    };
     Some(LocalFit {
         s0,
         s_amp: s0 + x_bar.clamp(-0.5, 0.5) * scale,
@@ -347,17 +346,32 @@ fn fit_window<const M: usize>(prof: &Profile, table: &PhaseTable, w: &Window) ->
         mean: c[0],
         phase_shift: -theta / (2.0 * PI),
         cycles,
-        alias_chi2,
+        alias,
     })
 }
 
+/// A local fit's pixel-parity terms, summed over them.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AliasTerms {
+    /// Σ c²/var c over the terms.
+    pub chi2: f64,
+    /// How many terms (0 where none entered the model).
+    pub dof: usize,
+}
+
 /// The parity terms' χ² per degree of freedom above which a strip shows a
-/// demosaicked CFA's aliases. Without a mosaic it ran 1.6–2.3 on the
-/// independent camera's JPEG and PNG shots and 3.1–4.1 on the simulator's
-/// q90 JPEGs (straight and turned 45°: the windows' residuals are not
+/// demosaicked CFA's aliases. Without a mosaic it ran 1.4–2.3 on the
+/// independent camera's JPEG and PNG shots and 1–4.6 on the simulator's q90
+/// JPEGs (straight and turned 45°: the windows' residuals are not
 /// independent, and JPEG's quantisation leaves grid-locked patterns of its
-/// own); with one, 18–280 (bilinear and Malvar–He–Cutler demosaics, strips
-/// turned 0–3°).
+/// own), but 9.3 on one located shot's low-contrast sweep (tilted, 0.2
+/// printed contrast); with a mosaic 23–280 within 0.4° of an axis, 6.7–63
+/// at 0.5–1.2° and 1.8–7.2 at 1.4–2.6°, where the patterns average out in
+/// the bins and the terms matter little. At 6 the one shot that needs them
+/// most (0.55°, 6.7: RMS 0.0066 without them, 0.0027 with) keeps them, and
+/// the false one costs little (RMS 0.0115 → 0.0128, 4 of 22 points left
+/// out). Neither the phase of the terms against the sine (lateral CA turns
+/// it) nor their power against it told the two apart better.
 pub const CFA_SEEN: f64 = 6.0;
 
 /// Whether the profile's bins show a demosaicked CFA's aliases (the sine
@@ -375,7 +389,7 @@ pub fn cfa_aliases_seen(prof: &Profile, law: &PhaseLaw, window_cycles: f64) -> b
     let table = PhaseTable::new(prof, law);
     let (p0, p1) = (table.phase[0], table.phase[table.phase.len() - 1]);
     let windows = ((p1 - p0) / window_cycles).floor().max(0.0) as usize;
-    let (chi2, dof) = (0..windows)
+    let AliasTerms { chi2, dof } = (0..windows)
         .into_par_iter()
         .filter_map(|k| {
             let s0 = law.s_at_phase(
@@ -383,9 +397,13 @@ pub fn cfa_aliases_seen(prof: &Profile, law: &PhaseLaw, window_cycles: f64) -> b
                 prof.s[0],
                 prof.length,
             );
-            local_fit(prof, &table, law, s0, 0.5 * window_cycles).map(|f| f.alias_chi2)
+            local_fit(prof, &table, law, s0, 0.5 * window_cycles).map(|f| f.alias)
         })
-        .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        .filter(|t| t.dof > 0)
+        .reduce(AliasTerms::default, |a, b| AliasTerms {
+            chi2: a.chi2 + b.chi2,
+            dof: a.dof + b.dof,
+        });
     dof > 0 && chi2 > CFA_SEEN * dof as f64
 }
 
