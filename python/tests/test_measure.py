@@ -144,11 +144,14 @@ def test_array_kinds_agree():
     # Read as linear instead, the same picture is either refused by the quality
     # gate (the coded sine's harmonics count as noise) or measured visibly off;
     # never passed as the linear result.
+    # (Its own points: the harmonics such a read leaves, aliased onto the
+    # pixel grid, may leave some windows out.)
     try:
         wrong = sweepmtf.measure(g, roi=STRIP_ROI, refine_roi=False, tone="linear")
     except sweepmtf.MeasurementError:
         return
-    assert np.max(np.abs(wrong.curves[0].modulation[low] - 0.6)) > 0.02
+    w = wrong.curves[0]
+    assert np.max(np.abs(w.modulation[w.freq_cy_px < 0.08] - 0.6)) > 0.02
 
 
 def test_a_camera_tone_curve_is_taken_out_unless_tone_file():
