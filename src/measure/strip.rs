@@ -197,7 +197,7 @@ pub(super) fn measure_strip(
     }
     if !matches!(channel, "r" | "g" | "b") && parity.len() == prof.s.len() {
         prof.parity = parity;
-        if !super::estimate::fit::cfa_aliases_seen(&prof, &law, opts.window_cycles) {
+        if !super::estimate::cfa::cfa_aliases_seen(&prof, &law, opts.window_cycles) {
             prof.parity.clear();
         }
     }

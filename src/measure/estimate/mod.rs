@@ -11,6 +11,7 @@ use super::law::PhaseLaw;
 use super::profile::Profile;
 use serde::{Deserialize, Serialize};
 
+pub mod cfa;
 pub mod envelope;
 pub mod extrema;
 pub mod fit;
