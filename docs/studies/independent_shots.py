@@ -224,6 +224,21 @@ def decode(c, p):
     return np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
 
 
+def where_frequency(f, p):
+    """Where on the strip's centre line the local frequency is f cy/px (photo
+    px, through the lens's distortion) and the light there."""
+    px_per_mm = p["len_px"] / p["L"]
+    if p["sweep"] == "lin":
+        u = (f * px_per_mm - p["f0"]) / (p["f1"] - p["f0"]) * p["L"]
+    else:
+        k = math.log(p["f1"] / p["f0"]) / p["L"]
+        u = math.log(max(f * px_per_mm, 1e-9) / p["f0"]) / k
+    u = min(max(u, 0.0), p["L"])
+    _, hm = strip_geometry(p)
+    x, y = distort(*apply_h(hm, u, p["h"] / 2), p)
+    return x, y, float(light_at(np.array(x), np.array(y), p))
+
+
 def code_sharpened(f, t_lin, p):
     """The MTF read in linear light where the code is sharpened: a pure sine of
     transfer `t_lin` up to the code, at the light where the strip has local
@@ -235,18 +250,7 @@ def code_sharpened(f, t_lin, p):
     contrast at this light defines, as every modulation-based method reads it."""
     th = p["theta"]
     fx, fy = f * math.cos(th), f * math.sin(th)
-    # Where along the strip (chart mm) the local frequency is f, and its light.
-    px_per_mm = p["len_px"] / p["L"]
-    if p["sweep"] == "lin":
-        u = (f * px_per_mm - p["f0"]) / (p["f1"] - p["f0"]) * p["L"]
-    else:
-        k = math.log(p["f1"] / p["f0"]) / p["L"]
-        u = math.log(max(f * px_per_mm, 1e-9) / p["f0"]) / k
-    u = min(max(u, 0.0), p["L"])
-    _, hm = strip_geometry(p)
-    x, y = apply_h(hm, u, p["h"] / 2)
-    x, y = distort(x, y, p)
-    ell = float(light_at(np.array(x), np.array(y), p))
+    x, y, ell = where_frequency(f, p)
     n = 512
     ph = 2 * np.pi * np.arange(n) / n
     amp = ell * 0.4 * t_lin
@@ -301,22 +305,12 @@ def bayer_truth(f, p):
     transfer at the light where the strip has local frequency f, each colour
     displaced by its CA there, mosaicked, demosaicked, sRGB-encoded (each
     code sharpened where the camera sharpens it), mixed to the JPEG's Y′
-    (0.299, 0.587, 0.114) and decoded; the least-squares
-    fundamental (beside its harmonics and the CFA's aliases at +½ cy/px) over
-    its mean, over the printed 0.8."""
+    (0.299, 0.587, 0.114) and decoded; its fundamental (the CFA's aliases at
+    +½ cy/px cancelled, below) over its mean, over the printed 0.8."""
     th = p["theta"]
     fx, fy = f * math.cos(th), f * math.sin(th)
     t = float(otf_lens(np.array(f), p) * box(fx) * box(fy))
-    px_per_mm = p["len_px"] / p["L"]
-    if p["sweep"] == "lin":
-        u = (f * px_per_mm - p["f0"]) / (p["f1"] - p["f0"]) * p["L"]
-    else:
-        k = math.log(p["f1"] / p["f0"]) / p["L"]
-        u = math.log(max(f * px_per_mm, 1e-9) / p["f0"]) / k
-    u = min(max(u, 0.0), p["L"])
-    _, hm = strip_geometry(p)
-    x0, y0 = apply_h(hm, u, p["h"] / 2)
-    ell = float(light_at(np.array(x0), np.array(y0), p))
+    x0, y0, ell = where_frequency(f, p)
     # The chain is periodic in 2 px, so its response to the sine is the sine's
     # fundamental plus aliases at +½ cy/px in x, y or both, and harmonics.
     # Stepping the sine's phase in 16 steps and taking the first Fourier

@@ -73,6 +73,7 @@ pub fn cfa_aliases_seen(prof: &Profile, law: &PhaseLaw, window_cycles: f64) -> b
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::measure::estimate::tests_support::linear_profile;
     use std::f64::consts::PI;
 
     /// A demosaicked sine along a pixel axis: each 0.25-px bin holds pixels
@@ -83,16 +84,7 @@ mod tests {
     /// alias coincides with it); without them it read up to 7 % off.
     #[test]
     fn a_cfa_alias_locked_to_the_pixel_grid_is_modelled_not_read_as_modulation() {
-        use crate::measure::law::LawKind;
-        let law = PhaseLaw {
-            kind: LawKind::Linear,
-            c0: 0.0,
-            c1: 0.1,
-            c2: 2.5e-4 / 2.0,
-        };
         let m = |f: f64| 0.8 * (1.0 - 1.2 * f);
-        let n = (1200.0 / 0.25) as usize;
-        let s: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) * 0.25).collect();
         let sign = |s: f64| {
             if (s.floor() as i64) % 2 == 0 {
                 1.0
@@ -100,24 +92,12 @@ mod tests {
                 -1.0
             }
         };
-        let y = s
-            .iter()
-            .map(|&s| {
-                let ph = 2.0 * PI * law.phase(s);
-                let alias = 0.3 * sign(s) * (ph + 0.7).cos();
-                0.5 * (1.0 + m(law.freq(s)) * (ph.cos() + alias))
-            })
-            .collect();
-        let mut prof = Profile {
-            parity: s.iter().map(|&s| [sign(s), 0.0, 0.0]).collect(),
-            s,
-            y,
-            count: vec![1.0; n],
-            var_s: vec![0.0; n],
-            bin: 0.25,
-            length: 1200.0,
-            ..Profile::default()
-        };
+        let (mut prof, law) = linear_profile(0.1, 2.5e-4, 1200.0, |law, s| {
+            let ph = 2.0 * PI * law.phase(s);
+            let alias = 0.3 * sign(s) * (ph + 0.7).cos();
+            0.5 * (1.0 + m(law.freq(s)) * (ph.cos() + alias))
+        });
+        prof.parity = prof.s.iter().map(|&s| [sign(s), 0.0, 0.0]).collect();
         let table = PhaseTable::new(&prof, &law);
         let worst = |prof: &Profile| {
             (0..60)

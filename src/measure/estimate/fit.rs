@@ -435,7 +435,7 @@ impl Estimator for SineFit {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::measure::estimate::tests_support::{chirp, lcg_normal};
+    use crate::measure::estimate::tests_support::{chirp, lcg_normal, linear_profile};
 
     /// A linear sweep from 0.008 cy/px rising 3.8e-4 per px (1100 px to
     /// 0.43), its modulation falling as a lens's does, 0.8·(1 − 1.5 f): at
@@ -445,29 +445,10 @@ mod tests {
     /// centroid it is within 1e-4; at the centre (0.046 cy/px) it read 0.24 % high.
     #[test]
     fn a_steep_chirp_is_read_where_its_window_weighs_it() {
-        use crate::measure::law::LawKind;
-        let law = PhaseLaw {
-            kind: LawKind::Linear,
-            c0: 0.0,
-            c1: 0.008,
-            c2: 3.8e-4 / 2.0,
-        };
         let m = |f: f64| 0.8 * (1.0 - 1.5 * f);
-        let n = (1100.0 / 0.25) as usize;
-        let s: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) * 0.25).collect();
-        let y = s
-            .iter()
-            .map(|&s| 0.5 * (1.0 + m(law.freq(s)) * (2.0 * PI * law.phase(s)).cos()))
-            .collect();
-        let prof = Profile {
-            s,
-            y,
-            count: vec![1.0; n],
-            var_s: vec![0.0; n],
-            bin: 0.25,
-            length: 1100.0,
-            ..Profile::default()
-        };
+        let (prof, law) = linear_profile(0.008, 3.8e-4, 1100.0, |law, s| {
+            0.5 * (1.0 + m(law.freq(s)) * (2.0 * PI * law.phase(s)).cos())
+        });
         let table = PhaseTable::new(&prof, &law);
         for s0 in [100.0, 150.0, 250.0, 600.0] {
             let fit = local_fit(&prof, &table, &law, s0, 2.0).unwrap();

@@ -150,4 +150,34 @@ pub(crate) mod tests_support {
         };
         (prof, law, truth)
     }
+
+    /// A noise-free profile over `length` units in bins of 0.25 (one sample
+    /// each) under the linear law starting at `f0` cycles/unit and rising
+    /// `rate` per unit; `value(law, s)` gives each bin's value.
+    pub fn linear_profile(
+        f0: f64,
+        rate: f64,
+        length: f64,
+        value: impl Fn(&PhaseLaw, f64) -> f64,
+    ) -> (Profile, PhaseLaw) {
+        let law = PhaseLaw {
+            kind: LawKind::Linear,
+            c0: 0.0,
+            c1: f0,
+            c2: rate / 2.0,
+        };
+        let n = (length / 0.25) as usize;
+        let s: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) * 0.25).collect();
+        let y = s.iter().map(|&s| value(&law, s)).collect();
+        let prof = Profile {
+            s,
+            y,
+            count: vec![1.0; n],
+            var_s: vec![0.0; n],
+            bin: 0.25,
+            length,
+            ..Profile::default()
+        };
+        (prof, law)
+    }
 }

@@ -261,14 +261,13 @@ pub(super) fn robust_from_extremes(acc: &mut [BinAcc]) -> Vec<(usize, f64, f64)>
 /// patterns too.
 pub(super) fn finish(acc: &[BinAcc], prof: &mut Profile, parity: bool) {
     for a in acc {
-        if parity && a.n > 0 {
-            let c = a.n as f64;
-            prof.parity.push(a.parity.map(|p| p as f64 / c));
-        }
         if a.n == 0 {
             continue;
         }
         let c = a.n as f64;
+        if parity {
+            prof.parity.push(a.parity.map(|p| p as f64 / c));
+        }
         let ms = a.ssum / c;
         prof.s.push(ms);
         prof.var_s.push((a.ssum2 / c - ms * ms).max(0.0));
