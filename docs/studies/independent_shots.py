@@ -53,7 +53,8 @@ then a bilinear or Malvar–He–Cutler demosaic, with lateral CA of up to
 ±1 px at the frame's corner in red and in blue; session 28; its truth is
 the luma MTF a sine chart defines through mosaic, demosaic, CA, sRGB and
 the JPEG's Y′, `bayer_truth`), bayerall (that with uneven light, the code
-sharpened and q75–92). EXTRA="--tone file" passes options to `measure`;
+sharpened and q75–92), bayernl (bayer's shots demosaicked by Menon et
+al.'s directional, non-linear method instead; session 29). EXTRA="--tone file" passes options to `measure`;
 SHOW_TONE=1 prints the tone correction and its black level found; with
 KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay. Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
@@ -274,9 +275,20 @@ def cfa_masks(shape):
 
 def demosaic(m, how):
     """A white-balanced RGGB mosaic → R, G, B planes: bilinear (a camera's
-    fast path) or Malvar–He–Cutler's gradient-corrected 5×5 kernels (2004;
-    many camera ISPs and OpenCV's default)."""
+    fast path), Malvar–He–Cutler's gradient-corrected 5×5 kernels (2004;
+    many camera ISPs and OpenCV's default) or Menon–Andriani–Calvagno's
+    directional, edge-adaptive one (2007, "DDFAPD": each missing green
+    interpolated along the direction its neighbourhood varies least, then
+    refined; not linear), the last from the colour-demosaicing package
+    (pip install colour-demosaicing). Our bilinear and Malvar–He–Cutler
+    agree with that package's to the last bit away from the frame's edge."""
     from scipy.ndimage import convolve
+
+    if how == "menon":
+        from colour_demosaicing import demosaicing_CFA_Bayer_Menon2007
+
+        rgb = demosaicing_CFA_Bayer_Menon2007(m, "RGGB")
+        return rgb[..., 0], rgb[..., 1], rgb[..., 2]
 
     r, g, b, even_row = cfa_masks(m.shape)
     conv = lambda k: convolve(m, np.array(k, dtype=float), mode="mirror")
@@ -527,7 +539,7 @@ def draw(kind, rng):
         px_per_mm = p["len_px"] / p["L"]
         p["f0"] = u(0.004, 0.02) * px_per_mm
         p["f1"] = u(0.35, 0.6) * px_per_mm
-    if kind in ("bayer", "bayerall"):
+    if kind in ("bayer", "bayerall", "bayernl"):
         # Drawn last too. An RGGB sensor demosaicked bilinearly or by
         # Malvar–He–Cutler, with lateral CA of up to ±1 px at the frame's
         # corner in red and in blue, each its own.
@@ -535,6 +547,9 @@ def draw(kind, rng):
         rn = math.hypot(W, H) / 2
         p["ca_r"] = u(-1, 1) / rn
         p["ca_b"] = u(-1, 1) / rn
+    if kind == "bayernl":
+        # A non-linear, edge-directed demosaic instead (session 29).
+        p["bayer"] = "menon"
     if kind == "bayerall":
         # And the rest of a camera: uneven light, sharpening of the code, q75–92.
         p["vignette"] = 0.5

@@ -199,6 +199,10 @@ pub(super) fn measure_strip(
         prof.parity = parity;
         if !super::estimate::cfa::cfa_aliases_seen(&prof, &law, opts.window_cycles) {
             prof.parity.clear();
+        } else if opts.method != Method::Fit {
+            // Estimators without terms for the aliases read them as
+            // modulation: the fit's terms take them out of the profile.
+            super::estimate::cfa::remove_aliases(&mut prof, &law, opts.window_cycles);
         }
     }
     let grid = output_grid(&law, prof.s[0], prof.s[prof.s.len() - 1]);

@@ -334,9 +334,18 @@ fn fit_window<const M: usize>(prof: &Profile, table: &PhaseTable, w: &Window) ->
     let a2 = c[2] * c[2] + c[3] * c[3];
     let amp = (a2 - va - vb).max(0.0).sqrt();
     let theta = c[3].atan2(c[2]);
+    let mut coef = [[0.0; 2]; 3];
+    let mut q = N;
+    for (cp, &on) in coef.iter_mut().zip(&w.patterns) {
+        if on {
+            *cp = [c[q], c[q + 1]];
+            q += 2;
+        }
+    }
     let alias = super::cfa::AliasTerms {
         chi2: (N..M).map(|q| c[q] * c[q] / cov(q).max(1e-300)).sum(),
         dof: M - N,
+        coef,
     };
     Some(LocalFit {
         s0,
