@@ -20,6 +20,7 @@ mod chart_output;
 mod chart_sinemtf;
 mod colour_moire;
 mod demosaic_luma;
+mod ends_near_axis;
 mod exif_jpeg;
 mod fuzz_slice;
 mod gui_api;
