@@ -54,7 +54,8 @@ then a bilinear or Malvar–He–Cutler demosaic, with lateral CA of up to
 the luma MTF a sine chart defines through mosaic, demosaic, CA, sRGB and
 the JPEG's Y′, `bayer_truth`), bayerall (that with uneven light, the code
 sharpened and q75–92), bayernl (bayer's shots demosaicked by Menon et
-al.'s directional, non-linear method instead; session 29). EXTRA="--tone file" passes options to `measure`;
+al.'s directional, non-linear method instead; session 29; needs
+colour-demosaicing). EXTRA="--tone file" passes options to `measure`;
 SHOW_TONE=1 prints the tone correction and its black level found; with
 KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay. Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
