@@ -132,6 +132,33 @@ mod tests {
     use crate::measure::estimate::tests_support::linear_profile;
     use std::f64::consts::PI;
 
+    /// The test profiles' modulation at f (cycles/unit).
+    fn m(f: f64) -> f64 {
+        0.8 * (1.0 - 1.2 * f)
+    }
+
+    /// (−1)^x of the pixel column holding position s (one unit per pixel).
+    fn sign(s: f64) -> f64 {
+        if (s.floor() as i64) % 2 == 0 {
+            1.0
+        } else {
+            -1.0
+        }
+    }
+
+    /// A noise-free demosaicked sine along a pixel axis: the sine of
+    /// modulation [`m`] plus the CFA's alias, the sine times (−1)^x of
+    /// relative amplitude `alias` and its own phase (0.7 rad), with each
+    /// bin's parity pattern recorded.
+    fn aliased(alias: f64) -> (Profile, PhaseLaw) {
+        let (mut prof, law) = linear_profile(0.1, 2.5e-4, 1200.0, |law, s| {
+            let ph = 2.0 * PI * law.phase(s);
+            0.5 * (1.0 + m(law.freq(s)) * (ph.cos() + alias * sign(s) * (ph + 0.7).cos()))
+        });
+        prof.parity = prof.s.iter().map(|&s| [sign(s), 0.0, 0.0]).collect();
+        (prof, law)
+    }
+
     /// A demosaicked sine along a pixel axis: each 0.25-px bin holds pixels
     /// of one column, so the CFA's alias, the sine times (−1)^x with its own
     /// amplitude (30 %) and phase, reaches the profile at ½ − f cy/px. With
@@ -140,20 +167,7 @@ mod tests {
     /// alias coincides with it); without them it read up to 7 % off.
     #[test]
     fn a_cfa_alias_locked_to_the_pixel_grid_is_modelled_not_read_as_modulation() {
-        let m = |f: f64| 0.8 * (1.0 - 1.2 * f);
-        let sign = |s: f64| {
-            if (s.floor() as i64) % 2 == 0 {
-                1.0
-            } else {
-                -1.0
-            }
-        };
-        let (mut prof, law) = linear_profile(0.1, 2.5e-4, 1200.0, |law, s| {
-            let ph = 2.0 * PI * law.phase(s);
-            let alias = 0.3 * sign(s) * (ph + 0.7).cos();
-            0.5 * (1.0 + m(law.freq(s)) * (ph.cos() + alias))
-        });
-        prof.parity = prof.s.iter().map(|&s| [sign(s), 0.0, 0.0]).collect();
+        let (mut prof, law) = aliased(0.3);
         let table = PhaseTable::new(&prof, &law);
         let worst = |prof: &Profile| {
             (0..60)
@@ -181,23 +195,9 @@ mod tests {
     #[test]
     fn the_fits_alias_terms_take_the_alias_out_of_the_profile_for_the_other_estimators() {
         use crate::measure::estimate::Method;
-        let m = |f: f64| 0.8 * (1.0 - 1.2 * f);
-        let sign = |s: f64| {
-            if (s.floor() as i64) % 2 == 0 {
-                1.0
-            } else {
-                -1.0
-            }
-        };
-        let make = |alias: f64| {
-            linear_profile(0.1, 2.5e-4, 1200.0, |law, s| {
-                let ph = 2.0 * PI * law.phase(s);
-                0.5 * (1.0 + m(law.freq(s)) * (ph.cos() + alias * sign(s) * (ph + 0.7).cos()))
-            })
-        };
-        let (clean, law) = make(0.0);
-        let (mut prof, _) = make(0.3);
-        prof.parity = prof.s.iter().map(|&s| [sign(s), 0.0, 0.0]).collect();
+        let (mut clean, law) = aliased(0.0);
+        clean.parity.clear();
+        let (prof, _) = aliased(0.3);
         let grid: Vec<f64> = (0..100).map(|k| 100.0 + 10.0 * k as f64).collect();
         let worst = |est: &dyn crate::measure::estimate::Estimator, prof: &Profile| {
             let truth = est.estimate(&clean, &law, &grid);
