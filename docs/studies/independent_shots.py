@@ -57,7 +57,8 @@ sharpened and q75–92), bayernl (bayer's shots demosaicked by Menon et
 al.'s directional, non-linear method instead; session 29; needs
 colour-demosaicing). EXTRA="--tone file" passes options to `measure`;
 SHOW_TONE=1 prints the tone correction and its black level found; with
-KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay. Prints one line per shot
+KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay
+(KEEP_ALL=dir: each shot in dir/KIND_SEED_I). Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
 the chart modulation's error (printed 0.800).
 """
@@ -426,7 +427,8 @@ def render(p, rng):
         lin = refl[..., None] * light[..., None] * tint[None, None, :]
         # Sensor: Poisson shot noise and read noise in electrons, full well 9000.
         e = rng.poisson(np.clip(lin, 0, None) * fw).astype(np.float64) + rng.normal(0, 3.0, lin.shape)
-        lin = e / fw
+        # P_noise=0 probes a shot without sensor noise (the draws are still made).
+        lin = e / fw if p["noise"] == 1 else lin + p["noise"] * (e / fw - lin)
         # White balance (the camera neutralises the tint).
         lin = lin / tint[None, None, :]
     # Unsharp mask in linear light (separable discrete Gaussian).
@@ -482,6 +484,7 @@ def draw(kind, rng):
         bayer="",
         ca_r=0.0,
         ca_b=0.0,
+        noise=1.0,
     )
     # Chart frequencies chosen so the strip reaches ≈ 0.008 … 0.6 cy/px.
     px_per_mm = p["len_px"] / p["L"]
@@ -640,6 +643,10 @@ def main():
             p = draw(kind, rng)
             img, corners = render(p, rng)
             keep = os.environ.get("KEEP")
+            if os.environ.get("KEEP_ALL"):
+                # Every shot's files in a directory of its own.
+                keep = os.path.join(os.environ["KEEP_ALL"], f"{kind}_{seed}_{i}")
+                os.makedirs(keep, exist_ok=True)
             s, err = measure(img, corners, p, keep or tmp)
             if keep:
                 with open(f"{keep}/truth.csv", "w") as fh:
