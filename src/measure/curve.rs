@@ -693,6 +693,28 @@ mod tests {
     }
 
     #[test]
+    fn a_cut_off_near_the_points_leaves_them_uncorrected_and_finite() {
+        // f/22 on 1.5 µm pixels: cut-off 0.124 cy/px, inside the points'
+        // span, where ln D runs to −∞. The correction is not applied there
+        // (f/f_c > 0.8) and the estimate stays finite; a slope of −1e6 per
+        // cy/px (a cut-off at 1e-6 cy/px) is refused the same way.
+        use std::f64::consts::PI;
+        let fc = 0.124;
+        let diff = |f: f64| {
+            let x: f64 = (f / fc).min(1.0);
+            2.0 / PI * (x.acos() - x * (1.0 - x * x).sqrt())
+        };
+        let pts = curve(0.8, diff);
+        let a = extrapolate_chart_modulation(&pts, 0.0).unwrap();
+        assert!(a.value.is_finite() && a.err.is_finite(), "{a:?}");
+        assert!((a.value / 0.8 - 1.0).abs() < 0.01, "{a:?}");
+        let refs: Vec<&MtfPoint> = pts.iter().collect();
+        assert!(without_diffraction_tail(&refs, -1e6).is_none());
+        assert!(without_diffraction_tail(&refs, 0.0).is_none());
+        assert!(without_diffraction_tail(&refs, f64::NAN).is_none());
+    }
+
+    #[test]
     fn a_sharpened_start_is_followed_over_its_rise() {
         // Unsharp mask amount 0.8, σ 1.3 px on a Gaussian lens σ = 0.8 px: the
         // curve rises 14 % by 0.1 cy/px. The wide estimate follows the rise

@@ -539,7 +539,7 @@ fn measure_planes_lens(
         let drift = square.iter().map(|s| s.1).fold(0.0, f64::max);
         warnings.push(format!(
             "{}: the bars lie square to the JPEG's 8×8 blocks (they drift ≤ {drift:.2} px across \
-             the strip), so its quantisation error is not averaged along them (simulated q75: \
+             the strip at an end), so its quantisation error is not averaged along them (simulated q75: \
              MTF50 off by up to ±2.5 % and the chart modulation by up to +1.1 %, against ±1.1 % \
              and 0.45 % turned 0.1–5°); turn the chart by 1–5°",
             names.join(", ")

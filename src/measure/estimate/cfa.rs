@@ -49,11 +49,16 @@ pub const CFA_SEEN: f64 = 6.0;
 /// terms would only cost variance: on a JPEG turned 45° without a mosaic
 /// they raised the RMS error from 0.013 to 0.020 near 0.35 cy/px, where the
 /// (−1)^(x+y) pattern times the sine runs at the sine's own frequency.
-pub fn cfa_aliases_seen(prof: &Profile, law: &PhaseLaw, window_cycles: f64) -> bool {
-    if prof.parity.len() != prof.s.len() || prof.s.is_empty() {
+/// `table` is `law` tabulated over the bins of `prof` ([`PhaseTable::new`]).
+pub fn cfa_aliases_seen(
+    prof: &Profile,
+    law: &PhaseLaw,
+    table: &PhaseTable,
+    window_cycles: f64,
+) -> bool {
+    if prof.parity.len() != prof.s.len() || prof.s.is_empty() || table.phase.len() != prof.s.len() {
         return false;
     }
-    let table = PhaseTable::new(prof, law);
     let (p0, p1) = (table.phase[0], table.phase[table.phase.len() - 1]);
     let windows = ((p1 - p0) / window_cycles).floor().max(0.0) as usize;
     let AliasTerms { chi2, dof, .. } = (0..windows)
@@ -64,7 +69,7 @@ pub fn cfa_aliases_seen(prof: &Profile, law: &PhaseLaw, window_cycles: f64) -> b
                 prof.s[0],
                 prof.length,
             );
-            local_fit(prof, &table, law, s0, 0.5 * window_cycles).map(|f| f.alias)
+            local_fit(prof, table, law, s0, 0.5 * window_cycles).map(|f| f.alias)
         })
         .filter(|t| t.dof > 0)
         .reduce(AliasTerms::default, |a, b| AliasTerms {
@@ -84,12 +89,12 @@ pub fn cfa_aliases_seen(prof: &Profile, law: &PhaseLaw, window_cycles: f64) -> b
 /// (bin-attenuated) cos and sin, are subtracted from its value. The parity
 /// sums are then cleared: what stays is the sine common to all four pixel
 /// parities. Where a window was left out (an alias running with the sine
-/// itself) its neighbours' terms bridge it.
-pub fn remove_aliases(prof: &mut Profile, law: &PhaseLaw, window_cycles: f64) {
-    if prof.parity.len() != prof.s.len() || prof.s.is_empty() {
+/// itself) its neighbours' terms bridge it. `table` is `law` tabulated
+/// over the bins of `prof` ([`PhaseTable::new`]; it does not depend on the values).
+pub fn remove_aliases(prof: &mut Profile, law: &PhaseLaw, table: &PhaseTable, window_cycles: f64) {
+    if prof.parity.len() != prof.s.len() || prof.s.is_empty() || table.phase.len() != prof.s.len() {
         return;
     }
-    let table = PhaseTable::new(prof, law);
     let (p0, p1) = (table.phase[0], table.phase[table.phase.len() - 1]);
     let step = 0.25 * window_cycles;
     let centres = ((p1 - p0) / step).floor().max(0.0) as usize + 1;
@@ -98,7 +103,7 @@ pub fn remove_aliases(prof: &mut Profile, law: &PhaseLaw, window_cycles: f64) {
         .filter_map(|k| {
             let p = p0 + k as f64 * step;
             let s0 = law.s_at_phase(p, prof.s[0], prof.length);
-            let f = local_fit(prof, &table, law, s0, 0.5 * window_cycles)?;
+            let f = local_fit(prof, table, law, s0, 0.5 * window_cycles)?;
             Some((law.phase(s0), f.alias.coef))
         })
         .collect();
@@ -219,7 +224,8 @@ mod tests {
             let est = method.estimator(4.0);
             let before = worst(est.as_ref(), &prof);
             let mut cleaned = prof.clone();
-            remove_aliases(&mut cleaned, &law, 4.0);
+            let table = PhaseTable::new(&cleaned, &law);
+            remove_aliases(&mut cleaned, &law, &table, 4.0);
             assert!(cleaned.parity.is_empty());
             let after = worst(est.as_ref(), &cleaned);
             eprintln!("{}: {before:.4} -> {after:.4}", method.name());
