@@ -204,7 +204,7 @@ fn near_or_wide(pts: &[&MtfPoint], f_lo: f64) -> Result<ChartModulation, String>
 /// 1.3e-3 at x = 0.14). x = f/f_c in [0, 1).
 pub fn diffraction_beyond_quadratic(x: f64) -> f64 {
     use std::f64::consts::PI;
-    let d = 2.0 / PI * (x.acos() - x * (1.0 - x * x).sqrt());
+    let d = crate::model::optics::diffraction_otf_t(1.0 - x);
     d.ln() + 4.0 / PI * x + 8.0 / (PI * PI) * x * x
 }
 
@@ -546,21 +546,41 @@ mod tests {
         }
     }
 
-    fn curve(m0: f64, f: impl Fn(f64) -> f64) -> Vec<MtfPoint> {
-        (0..200)
+    /// `n` points from `f0` cy/px, `df` apart: modulation m0·mtf(f), each
+    /// `mtf_err` uncertain, aliased beyond 0.5 cy/px.
+    fn grid(
+        m0: f64,
+        (f0, df, n): (f64, f64, usize),
+        mtf_err: f64,
+        mtf: impl Fn(f64) -> f64,
+    ) -> Vec<MtfPoint> {
+        (0..n)
             .map(|i| {
-                let fr = 0.005 + i as f64 * 0.0025;
+                let fr = f0 + i as f64 * df;
                 MtfPoint {
                     s: i as f64,
                     freq_cy_px: fr,
                     freq_chart: fr,
-                    modulation: m0 * f(fr),
-                    mtf: f(fr),
-                    mtf_err: 0.001,
+                    modulation: m0 * mtf(fr),
+                    mtf: mtf(fr),
+                    mtf_err,
                     aliased: fr > 0.5,
                 }
             })
             .collect()
+    }
+
+    fn curve(m0: f64, f: impl Fn(f64) -> f64) -> Vec<MtfPoint> {
+        grid(m0, (0.005, 0.0025, 200), 0.001, f)
+    }
+
+    /// A circular pupil's diffraction MTF, cut-off `fc` cy/px, from the closed
+    /// form (0 beyond the cut-off).
+    fn circular_pupil(fc: f64) -> impl Fn(f64) -> f64 {
+        move |f| {
+            let x = (f / fc).min(1.0);
+            2.0 / std::f64::consts::PI * (x.acos() - x * (1.0 - x * x).sqrt())
+        }
     }
 
     #[test]
@@ -572,11 +592,7 @@ mod tests {
             .value;
         assert!((a - 0.8).abs() < 0.8 * 1e-3, "{a}");
         // Diffraction (circular pupil), cutoff 0.9 cy/px: non-zero slope at 0.
-        let diff = |f: f64| {
-            let x: f64 = f / 0.9;
-            2.0 / std::f64::consts::PI * (x.acos() - x * (1.0 - x * x).sqrt())
-        };
-        let a = extrapolate_chart_modulation(&curve(0.6, diff), 0.0)
+        let a = extrapolate_chart_modulation(&curve(0.6, circular_pupil(0.9)), 0.0)
             .unwrap()
             .value;
         assert!((a - 0.6).abs() < 0.6 * 1e-3, "{a}");
@@ -612,30 +628,14 @@ mod tests {
         // share (period 0.08 cy/px). The fourth term is not significant: the
         // three terms read 0.8 at −0.2 %; a free cubic carries the ripple to
         // 0 at −1.3 % (both −0.02 % and 0.00 % without the ripple).
-        let diff = |f: f64| {
-            let x: f64 = f / 1.45;
-            2.0 / std::f64::consts::PI * (x.acos() - x * (1.0 - x * x).sqrt())
-        };
+        let diff = circular_pupil(1.45);
         let k = 2.0 * std::f64::consts::PI.powi(2);
         let m = |f: f64| {
-            0.8 * diff(f)
+            diff(f)
                 * (-k * 0.25 * f * f).exp()
                 * (1.0 + 0.0015 * (2.0 * std::f64::consts::PI * f / 0.08).sin())
         };
-        let pts: Vec<MtfPoint> = (0..75)
-            .map(|i| {
-                let f = 0.045 + 0.0035 * i as f64;
-                MtfPoint {
-                    s: i as f64,
-                    freq_cy_px: f,
-                    freq_chart: f,
-                    modulation: m(f),
-                    mtf: m(f) / 0.8,
-                    mtf_err: 0.002,
-                    aliased: false,
-                }
-            })
-            .collect();
+        let pts = grid(0.8, (0.045, 0.0035, 75), 0.002, m);
         let a = extrapolate_chart_modulation(&pts, 0.0).unwrap();
         assert!((a.value / 0.8 - 1.0).abs() < 3e-3, "{a:?}");
         assert!(a.linear_start, "{a:?}");
@@ -665,26 +665,10 @@ mod tests {
         // tied to the slope found, 0.03 % low (as measured).
         use std::f64::consts::PI;
         let fc = 0.957;
-        let diff = |f: f64| {
-            let x: f64 = f / fc;
-            2.0 / PI * (x.acos() - x * (1.0 - x * x).sqrt())
-        };
+        let diff = circular_pupil(fc);
         let sinc = |f: f64| (PI * f).sin() / (PI * f);
-        let m = |f: f64| 0.8 * diff(f) * (-2.0 * PI * PI * 0.46f64.powi(2) * f * f).exp() * sinc(f);
-        let pts: Vec<MtfPoint> = (0..60)
-            .map(|i| {
-                let f = 0.057 + 0.0035 * i as f64;
-                MtfPoint {
-                    s: i as f64,
-                    freq_cy_px: f,
-                    freq_chart: f,
-                    modulation: m(f),
-                    mtf: m(f) / 0.8,
-                    mtf_err: 0.002,
-                    aliased: false,
-                }
-            })
-            .collect();
+        let m = |f: f64| diff(f) * (-2.0 * PI * PI * 0.46f64.powi(2) * f * f).exp() * sinc(f);
+        let pts = grid(0.8, (0.057, 0.0035, 60), 0.002, m);
         let a = extrapolate_chart_modulation(&pts, 0.0).unwrap();
         assert!((a.value / 0.8 - 1.0).abs() < 4e-4, "{a:?}");
         assert!(a.linear_start, "{a:?}");
@@ -698,13 +682,7 @@ mod tests {
         // span, where ln D runs to −∞. The correction is not applied there
         // (f/f_c > 0.8) and the estimate stays finite; a slope of −1e6 per
         // cy/px (a cut-off at 1e-6 cy/px) is refused the same way.
-        use std::f64::consts::PI;
-        let fc = 0.124;
-        let diff = |f: f64| {
-            let x: f64 = (f / fc).min(1.0);
-            2.0 / PI * (x.acos() - x * (1.0 - x * x).sqrt())
-        };
-        let pts = curve(0.8, diff);
+        let pts = curve(0.8, circular_pupil(0.124));
         let a = extrapolate_chart_modulation(&pts, 0.0).unwrap();
         assert!(a.value.is_finite() && a.err.is_finite(), "{a:?}");
         assert!((a.value / 0.8 - 1.0).abs() < 0.01, "{a:?}");
