@@ -233,6 +233,12 @@ pub(super) fn measure_strip(
             || local_freq_deviation(&prof, &table, &law, &grid),
         )
     };
+    // The low end's own short windows, for the chart modulation (the fit's model).
+    let mut low = if contrast.is_none() && opts.method == Method::Fit {
+        normalise::low_end_points(&prof, &table, &law, &s_per_px, opts.window_cycles)
+    } else {
+        Vec::new()
+    };
     drop(table);
     let mut points: Vec<MtfPoint> = mods
         .iter()
@@ -275,10 +281,10 @@ pub(super) fn measure_strip(
     // 4.9 % (simulated shots, strong blur) against 0.2 % without them.
     let (s0, s1) = (prof.s[0], prof.s[prof.s.len() - 1]);
     let s_min = law.s_at_phase(law.phase(s0) + 0.5 * opts.window_cycles, s0, s1);
-    let read_chart = |pts: &[MtfPoint]| {
-        normalise::chart_modulation(pts, s_min, opts.window_cycles, contrast, channel, id)
+    let read_chart = |pts: &[MtfPoint], low: &[MtfPoint]| {
+        normalise::chart_modulation(pts, s_min, low, opts.window_cycles, contrast, channel, id)
     };
-    let (mut m_chart, mut m_chart_err, mut source, slope_rel) = read_chart(&points)?;
+    let (mut m_chart, mut m_chart_err, mut source, slope_rel) = read_chart(&points, &low)?;
     if m_chart_err > super::MAX_CHART_REL_ERR * m_chart {
         return Err(Failure::Unreliable(format!(
             "{channel}/{id}: the modulation is lost in noise (chart modulation {m_chart:.3} ± {m_chart_err:.3})"
@@ -300,12 +306,12 @@ pub(super) fn measure_strip(
         let mean = prof.y.iter().sum::<f64>() / prof.y.len().max(1) as f64;
         let taken = surround_leak::Surround::read(planes, strip).and_then(|sur| {
             let leak_at = |s: f64| sur.leak_rel(slope_rel, strip, s, opts.margin, to_linear, mean);
-            surround_leak::take_out(&mut points, s_min, leak_at)
+            surround_leak::take_out(&mut points, &mut low, s_min, leak_at)
         });
         if let Some(leak) = taken {
             // Read again from the points as corrected: the light beyond the
             // strip's ends lowers its first periods more than the rest.
-            match read_chart(&points) {
+            match read_chart(&points, &low) {
                 Ok((m, e, src, _)) => (m_chart, m_chart_err, source) = (m, e, src),
                 Err(_) => m_chart *= 1.0 + leak,
             }
@@ -362,9 +368,10 @@ pub(super) fn measure_strip(
             // Unseen, it leaves the chart modulation and, where the light
             // changes, each point uncertain: said, not hidden.
             Some(eps) => {
-                let share = tone_unseen::widen(&mut points, &prof, &law, eps, m_chart, |alt| {
-                    read_chart(alt).ok().map(|c| c.0)
-                });
+                let share =
+                    tone_unseen::widen(&mut points, &low, &prof, &law, eps, m_chart, |alt, low| {
+                        read_chart(alt, low).ok().map(|c| c.0)
+                    });
                 // MTF50 where it was given: its uncertainty from the widened points.
                 if figures.mtf50_cy_px.is_some() {
                     figures.mtf50_err_cy_px = curve::mtf50_sigma(&points);

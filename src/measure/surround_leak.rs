@@ -207,12 +207,15 @@ fn ring_sum(rel: &[f64], d: f64) -> f64 {
         .sum()
 }
 
-/// Scales every point's modulation by `1 + leak_at(s)` and returns the leak
-/// at the lowest point the chart modulation is read from (`s ≥ s_min`), or
-/// None (nothing changed) where it is not known there. The chart modulation
-/// is then read again from the points: the ends' light changes along the strip.
+/// Scales every point's modulation, and the low end's (the chart
+/// modulation's own points, [`super::normalise::low_end_points`]), by
+/// `1 + leak_at(s)` and returns the leak at the lowest point the chart
+/// modulation is read from (`s ≥ s_min`), or None (nothing changed) where it
+/// is not known there. The chart modulation is then read again from the
+/// points: the ends' light changes along the strip.
 pub(super) fn take_out(
     points: &mut [MtfPoint],
+    low: &mut [MtfPoint],
     s_min: f64,
     leak_at: impl Fn(f64) -> Option<f64>,
 ) -> Option<f64> {
@@ -222,7 +225,7 @@ pub(super) fn take_out(
         .map(|p| p.s)
         .fold(f64::INFINITY, f64::min);
     let leak = leak_at(s_ref)?;
-    for p in points.iter_mut() {
+    for p in points.iter_mut().chain(low.iter_mut()) {
         p.modulation *= 1.0 + leak_at(p.s).unwrap_or(leak);
     }
     Some(leak)
@@ -442,6 +445,6 @@ mod tests {
         );
         // Nothing is changed where the leak is not known at the low end.
         let mut pts = vec![];
-        assert_eq!(take_out(&mut pts, 0.0, |_| None), None);
+        assert_eq!(take_out(&mut pts, &mut [], 0.0, |_| None), None);
     }
 }

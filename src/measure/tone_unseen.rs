@@ -43,17 +43,18 @@ pub fn scale(fix: &ToneFix) -> Option<f64> {
 /// modulations are re-read as they would be were an offset `eps·μ̄` taken
 /// out (each scaled by `1 + eps·μ̄/μ(s)`, μ the strip's local
 /// mean value over a period, at least [`MEAN_SPAN`] of the strip, μ̄ its
-/// mean), the chart modulation taken again from them by `chart_modulation`
-/// (the extrapolation follows how the offset changes along the low end),
-/// and each MTF's change is its share. Nothing is widened where the chart
-/// modulation cannot be taken again.
+/// mean), the chart modulation taken again from them and the `low` end's
+/// points, scaled alike, by `chart_modulation` (the extrapolation follows
+/// how the offset changes along the low end), and each MTF's change is its
+/// share. Nothing is widened where the chart modulation cannot be taken again.
 pub(super) fn widen(
     points: &mut [MtfPoint],
+    low: &[MtfPoint],
     prof: &Profile,
     law: &PhaseLaw,
     eps: f64,
     m_chart: f64,
-    chart_modulation: impl Fn(&[MtfPoint]) -> Option<f64>,
+    chart_modulation: impl Fn(&[MtfPoint], &[MtfPoint]) -> Option<f64>,
 ) -> f64 {
     let n = prof.y.len();
     if n == 0 || !(m_chart > 0.0) {
@@ -70,19 +71,18 @@ pub(super) fn widen(
     if !(mean > 0.0) {
         return 0.0;
     }
-    let scale: Vec<f64> = points
-        .iter()
-        .map(|p| 1.0 + eps * mean / mean_at(p.s).unwrap_or(mean))
-        .collect();
-    let alt: Vec<MtfPoint> = points
-        .iter()
-        .zip(&scale)
-        .map(|(p, k)| MtfPoint {
-            modulation: p.modulation * k,
-            ..*p
-        })
-        .collect();
-    let Some(m_alt) = chart_modulation(&alt).filter(|m| m.is_finite() && *m > 0.0) else {
+    let scale_at = |p: &MtfPoint| 1.0 + eps * mean / mean_at(p.s).unwrap_or(mean);
+    let scale: Vec<f64> = points.iter().map(scale_at).collect();
+    let scaled = |pts: &[MtfPoint]| -> Vec<MtfPoint> {
+        pts.iter()
+            .map(|p| MtfPoint {
+                modulation: p.modulation * scale_at(p),
+                ..*p
+            })
+            .collect()
+    };
+    let m_alt = chart_modulation(&scaled(points), &scaled(low));
+    let Some(m_alt) = m_alt.filter(|m| m.is_finite() && *m > 0.0) else {
         return 0.0;
     };
     for (p, k) in points.iter_mut().zip(&scale) {
@@ -187,7 +187,9 @@ mod tests {
             .collect();
         let m_true = two_point(&truth).unwrap();
         let before: Vec<f64> = pts.iter().map(|p| p.mtf_err).collect();
-        let cm_share = widen(&mut pts, &prof, &law, eps, m_chart, two_point);
+        let cm_share = widen(&mut pts, &[], &prof, &law, eps, m_chart, |p, _| {
+            two_point(p)
+        });
         let cm_bias = (m_true - m_chart).abs();
         assert!(
             (cm_share - cm_bias).abs() < 0.1 * cm_bias,
@@ -213,26 +215,40 @@ mod tests {
         let law = linear_law(0.02, 0.001);
         let mut pts = vec![point(10.0, 1.0), point(150.0, 0.3)];
         let m_chart = two_point(&pts).unwrap();
-        let share = widen(&mut pts, &prof, &law, 0.2, m_chart, two_point);
+        let share = widen(&mut pts, &[], &prof, &law, 0.2, m_chart, |p, _| {
+            two_point(p)
+        });
         // Even light: every modulation scaled by 1 + 0.2 (first order).
         assert!((share - m_chart * 0.2).abs() < 1e-9, "{share}");
         assert!(pts.iter().all(|p| (p.mtf_err - 0.001).abs() < 1e-9));
         // No profile, no chart modulation, a dark profile: left as they are.
         let dark = profile((0..10).map(f64::from).collect(), vec![0.0; 10]);
-        assert_eq!(widen(&mut pts, &dark, &law, 0.2, 0.8, two_point), 0.0);
+        assert_eq!(
+            widen(&mut pts, &[], &dark, &law, 0.2, 0.8, |p, _| two_point(p)),
+            0.0
+        );
         assert_eq!(
             widen(
                 &mut pts,
+                &[],
                 &profile(vec![], vec![]),
                 &law,
                 0.2,
                 0.8,
-                two_point
+                |p, _| two_point(p)
             ),
             0.0
         );
-        assert_eq!(widen(&mut pts, &prof, &law, 0.2, 0.8, |_| None), 0.0);
-        assert_eq!(widen(&mut pts, &prof, &law, 0.2, f64::NAN, two_point), 0.0);
+        assert_eq!(
+            widen(&mut pts, &[], &prof, &law, 0.2, 0.8, |_, _| None),
+            0.0
+        );
+        assert_eq!(
+            widen(&mut pts, &[], &prof, &law, 0.2, f64::NAN, |p, _| two_point(
+                p
+            )),
+            0.0
+        );
         assert!(pts.iter().all(|p| (p.mtf_err - 0.001).abs() < 1e-9));
     }
 }
