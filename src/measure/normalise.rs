@@ -27,6 +27,7 @@ pub(super) fn chart_modulation(
         Some(c) => Ok((c, 0.0, format!("target: printed contrast {c}"), 0.0)),
         None => {
             let below: Vec<MtfPoint> = low.iter().filter(|p| p.s < s_min).copied().collect();
+            let below_f: Vec<f64> = below.iter().map(|p| p.freq_cy_px).collect();
             let joined: Vec<MtfPoint>;
             let (points, s_min) = if below.is_empty() {
                 (points, s_min)
@@ -41,11 +42,21 @@ pub(super) fn chart_modulation(
             let mut cm = curve::extrapolate_chart_modulation(points, s_min)
                 .map_err(|e| Failure::ModulationUnknown(format!("{channel}/{id}: {e}")))?;
             cm.err *= shared_data_factor(points, cm.f_lo, cm.f_hi, window_cycles);
+            // The low end's points it read (not in the curve): said.
+            let short = below_f
+                .iter()
+                .filter(|&&f| f >= cm.f_lo && f <= cm.f_hi)
+                .count();
+            let short = match short {
+                0 => String::new(),
+                1 => ", its first point from a two-cycle window".into(),
+                n => format!(", its first {n} points from two-cycle windows"),
+            };
             Ok((
                 cm.value,
                 cm.err,
                 format!(
-                    "extrapolated to 0 cy/px from {:.4}–{:.4} cy/px (± {:.4}{})",
+                    "extrapolated to 0 cy/px from {:.4}–{:.4} cy/px (± {:.4}{}{short})",
                     cm.f_lo,
                     cm.f_hi,
                     cm.err,
@@ -255,5 +266,60 @@ mod tests {
             low_end_points(&prof, &PhaseTable::new(&prof, &flat), &flat, &|_| 1.0, 4.0).is_empty()
         );
         assert!(low_end_points(&prof, &table, &law, &|_| 1.0, f64::NAN).is_empty());
+    }
+
+    #[test]
+    fn the_chart_modulation_reads_the_low_end_and_says_so() {
+        let (prof, law) = sweep();
+        let table = PhaseTable::new(&prof, &law);
+        let low = low_end_points(&prof, &table, &law, &|_| 1.0, 4.0);
+        // The curve's points from the first whole 4-cycle window on (exact).
+        let s_min = law.s_at_phase(2.0, 0.0, 1300.0);
+        let points: Vec<MtfPoint> = (0..80)
+            .map(|k| {
+                let s = law.s_at_phase(2.5 + 0.5 * k as f64, 0.0, 1300.0);
+                let f = law.freq(s);
+                let m = 0.8 * (1.0 - 1.2 * f);
+                MtfPoint {
+                    s,
+                    freq_cy_px: f,
+                    freq_chart: f,
+                    modulation: m,
+                    mtf: m,
+                    mtf_err: 1e-3,
+                    aliased: false,
+                }
+            })
+            .collect();
+        let with = chart_modulation(&points, s_min, &low, 4.0, None, "grey", "strip").unwrap();
+        let without = chart_modulation(&points, s_min, &[], 4.0, None, "grey", "strip").unwrap();
+        assert!((with.0 / 0.8 - 1.0).abs() < 5e-4, "{with:?}");
+        assert!(
+            with.2.contains("its first 2 points from two-cycle windows"),
+            "{}",
+            with.2
+        );
+        assert!(!without.2.contains("two-cycle"), "{}", without.2);
+        // They reach lower than the curve's own first point.
+        let f_lo = |src: &str| -> f64 {
+            src.split("from ")
+                .nth(1)
+                .unwrap()
+                .split('–')
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap()
+        };
+        assert!(
+            f_lo(&with.2) < f_lo(&without.2),
+            "{} / {}",
+            with.2,
+            without.2
+        );
+        // A printed contrast reads none of it.
+        let printed =
+            chart_modulation(&points, s_min, &low, 4.0, Some(0.8), "grey", "strip").unwrap();
+        assert_eq!((printed.0, printed.1), (0.8, 0.0));
     }
 }
