@@ -223,14 +223,21 @@ mod tests {
         (prof, law)
     }
 
-    #[test]
-    fn the_low_end_is_read_below_the_first_whole_window_and_exact() {
+    /// [`sweep`], its table, its low end's points (4-cycle estimator windows)
+    /// and where the estimator's first whole window is centred.
+    fn low_end_of_sweep() -> (Profile, PhaseLaw, PhaseTable, Vec<MtfPoint>, f64) {
         let (prof, law) = sweep();
         let table = PhaseTable::new(&prof, &law);
-        let pts = low_end_points(&prof, &table, &law, &|_| 1.0, 4.0);
+        let low = low_end_points(&prof, &table, &law, &|_| 1.0, 4.0);
+        let s_first_whole = law.s_at_phase(2.0, 0.0, 1300.0);
+        (prof, law, table, low, s_first_whole)
+    }
+
+    #[test]
+    fn the_low_end_is_read_below_the_first_whole_window_and_exact() {
+        let (prof, law, table, pts, s_first_whole) = low_end_of_sweep();
         // Windows centred 1.25 and 1.75 cycles past the end: two points,
         // below where the estimator's first whole 4-cycle window is centred.
-        let s_first_whole = law.s_at_phase(2.0, 0.0, 1300.0);
         assert_eq!(pts.len(), 2, "{pts:?}");
         for p in &pts {
             assert!(p.s < s_first_whole && p.s > 0.0, "{p:?}");
@@ -270,11 +277,8 @@ mod tests {
 
     #[test]
     fn the_chart_modulation_reads_the_low_end_and_says_so() {
-        let (prof, law) = sweep();
-        let table = PhaseTable::new(&prof, &law);
-        let low = low_end_points(&prof, &table, &law, &|_| 1.0, 4.0);
+        let (_, law, _, low, s_min) = low_end_of_sweep();
         // The curve's points from the first whole 4-cycle window on (exact).
-        let s_min = law.s_at_phase(2.0, 0.0, 1300.0);
         let points: Vec<MtfPoint> = (0..80)
             .map(|k| {
                 let s = law.s_at_phase(2.5 + 0.5 * k as f64, 0.0, 1300.0);
