@@ -73,12 +73,12 @@ pub(super) fn chart_modulation(
 }
 
 /// Half-width of the low end's windows (cycles): two cycles each.
-pub(super) const LOW_END_HALF_CYCLES: f64 = 1.0;
+const LOW_END_HALF_CYCLES: f64 = 1.0;
 
 /// Phase kept clear of the strip's low end by the low end's windows (cycles):
 /// the paper's light blurred across the end and a corner a few pixels off
 /// stay outside them.
-pub(super) const LOW_END_MARGIN_CYCLES: f64 = 0.25;
+const LOW_END_MARGIN_CYCLES: f64 = 0.25;
 
 /// Phase between the low end's windows (cycles).
 const LOW_END_STEP_CYCLES: f64 = 0.5;
