@@ -73,15 +73,18 @@ pub(super) fn widen(
     }
     let scale_at = |p: &MtfPoint| 1.0 + eps * mean / mean_at(p.s).unwrap_or(mean);
     let scale: Vec<f64> = points.iter().map(scale_at).collect();
-    let scaled = |pts: &[MtfPoint]| -> Vec<MtfPoint> {
-        pts.iter()
-            .map(|p| MtfPoint {
-                modulation: p.modulation * scale_at(p),
-                ..*p
-            })
-            .collect()
+    let times = |p: &MtfPoint, k: f64| MtfPoint {
+        modulation: p.modulation * k,
+        ..*p
     };
-    let m_alt = chart_modulation(&scaled(points), &scaled(low));
+    // The points' scales are the ones their errors are widened by below (read once).
+    let alt: Vec<MtfPoint> = points
+        .iter()
+        .zip(&scale)
+        .map(|(p, &k)| times(p, k))
+        .collect();
+    let alt_low: Vec<MtfPoint> = low.iter().map(|p| times(p, scale_at(p))).collect();
+    let m_alt = chart_modulation(&alt, &alt_low);
     let Some(m_alt) = m_alt.filter(|m| m.is_finite() && *m > 0.0) else {
         return 0.0;
     };
