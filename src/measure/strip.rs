@@ -22,6 +22,9 @@ use rayon::prelude::*;
 pub const RIPPLE_SIGMA_CY_PX: f64 = 0.06;
 /// Largest σ of that smoothing as a fraction of the frequency (dimensionless).
 pub const RIPPLE_SIGMA_REL: f64 = 0.25;
+/// The RMS of a coarse JPEG's block ripple (MTF units): ±0.015 peak at
+/// 0.25–0.45 cy/px (simulated q75), the error the smoothing averages out.
+pub const RIPPLE_RMS_MTF: f64 = 0.015 / std::f64::consts::SQRT_2;
 
 /// Refuse when more than this fraction of the region is clipped.
 const CLIP_REFUSE: f64 = 0.02;
@@ -323,7 +326,7 @@ pub(super) fn measure_strip(
     // The block ripple is smoothed after the chart modulation is read from the
     // low end, so the lowest points stay independent (and unbent by the smoothing).
     if coding.block_ripple {
-        smooth_block_ripple(&mut points);
+        smooth_block_ripple(&mut points, RIPPLE_RMS_MTF * m_chart);
     }
     normalise::normalise(&mut points, m_chart, m_chart_err);
     let mut figures = curve::figures(&points);
@@ -475,7 +478,14 @@ pub fn bar_drift_px(c: &Curve) -> f64 {
 /// uncertainty becomes the kernel-weighted mean of its neighbours' (their
 /// errors are correlated, so not divided by √n). Where the fit is singular
 /// the kernel mean is kept.
-fn smooth_block_ripple(points: &mut [MtfPoint]) {
+///
+/// Each point weighs 1/(σ² + `ripple`²), `ripple` the ripple's RMS in the
+/// points' units: the ripple is every point's error here, and the noise
+/// alone let the points the quantiser had left flat pin the fit. Where the
+/// q75 file held nothing beyond ≈ 0.34 cy/px (a lens of σ 1.2 px), those
+/// points read 0 ± 10⁻⁸ and, weighted by 1/σ², dragged the curve to 0 from
+/// 0.205 cy/px, where it is 0.25 (RMS 0.072, MTF10 0.207 for 0.26 cy/px).
+fn smooth_block_ripple(points: &mut [MtfPoint], ripple: f64) {
     let src: Vec<(f64, f64, f64)> = points
         .iter()
         .filter(|p| !p.aliased && p.mtf_err.is_finite() && p.mtf_err > 0.0)
@@ -488,12 +498,12 @@ fn smooth_block_ripple(points: &mut [MtfPoint]) {
     let residual: Vec<(f64, f64, f64)> = src
         .iter()
         .map(|&(f, m, e)| {
-            let s = local_quadratic(&src, f, first, last).map_or(m, |v| v.0);
+            let s = local_quadratic(&src, f, first, last, ripple).map_or(m, |v| v.0);
             (f, m - s, e)
         })
         .collect();
     for p in points.iter_mut().filter(|p| !p.aliased) {
-        let Some((value, err)) = local_quadratic(&src, p.freq_cy_px, first, last) else {
+        let Some((value, err)) = local_quadratic(&src, p.freq_cy_px, first, last, ripple) else {
             continue;
         };
         // Not where the ends narrow the kernel: a second pass there gives
@@ -505,7 +515,7 @@ fn smooth_block_ripple(points: &mut [MtfPoint]) {
         let back = if edge_limited {
             0.0
         } else {
-            local_quadratic(&residual, p.freq_cy_px, first, last).map_or(0.0, |v| v.0)
+            local_quadratic(&residual, p.freq_cy_px, first, last, ripple).map_or(0.0, |v| v.0)
         };
         p.modulation = value + back;
         p.mtf = p.modulation;
@@ -514,9 +524,16 @@ fn smooth_block_ripple(points: &mut [MtfPoint]) {
 }
 
 /// The local quadratic of [`smooth_block_ripple`] through `src` (f cy/px,
-/// value, σ; sorted by f, spanning `first`–`last`) read at `f0` (cy/px):
-/// the value and the kernel-weighted mean σ; `None` where the kernel is empty.
-fn local_quadratic(src: &[(f64, f64, f64)], f0: f64, first: f64, last: f64) -> Option<(f64, f64)> {
+/// value, σ; sorted by f, spanning `first`–`last`) read at `f0` (cy/px),
+/// each point weighed by 1/(σ² + `ripple`²): the value and the
+/// kernel-weighted mean σ; `None` where the kernel is empty.
+fn local_quadratic(
+    src: &[(f64, f64, f64)],
+    f0: f64,
+    first: f64,
+    last: f64,
+    ripple: f64,
+) -> Option<(f64, f64)> {
     // Narrower towards the ends, so the window stays whole (a one-sided window is biased by the slope).
     let edge = (f0 - first).min(last - f0) / 3.0;
     let sigma = RIPPLE_SIGMA_CY_PX.min(RIPPLE_SIGMA_REL * f0).min(edge);
@@ -534,7 +551,7 @@ fn local_quadratic(src: &[(f64, f64, f64)], f0: f64, first: f64, last: f64) -> O
         sm += k * m;
         se += k * e;
         n += 1;
-        let w = k / (e * e);
+        let w = k / (e * e + ripple * ripple);
         let basis = [1.0, d, d * d];
         for r in 0..3 {
             b[r] += w * basis[r] * m;
@@ -575,7 +592,7 @@ mod tests {
         // A sharpened curve's peak (a parabola, 1.2 at 0.2 cy/px) is kept exactly: the fit is quadratic.
         let parabola = |f: f64| 1.2 - 3.0 * (f - 0.2).powi(2);
         let mut pts = curve(parabola, 0.003);
-        smooth_block_ripple(&mut pts);
+        smooth_block_ripple(&mut pts, RIPPLE_RMS_MTF);
         // (The outermost two points on each side, with fewer than 5 in their
         // window, keep a kernel mean; the twicing pass carries their residual
         // a little way in: ≤ 2.5·10⁻⁶ below 0.05 cy/px.)
@@ -599,7 +616,7 @@ mod tests {
                 }
         };
         let mut pts = curve(rippled, 0.003);
-        smooth_block_ripple(&mut pts);
+        smooth_block_ripple(&mut pts, RIPPLE_RMS_MTF);
         for p in pts.iter().filter(|p| (0.23..0.48).contains(&p.freq_cy_px)) {
             assert!(
                 (p.mtf - gauss(p.freq_cy_px)).abs() < 0.004,
@@ -609,7 +626,7 @@ mod tests {
             );
         }
         let mut pts = curve(gauss, 0.003);
-        smooth_block_ripple(&mut pts);
+        smooth_block_ripple(&mut pts, RIPPLE_RMS_MTF);
         for p in &pts {
             let moved = (p.mtf - gauss(p.freq_cy_px)).abs();
             if p.aliased {
@@ -618,6 +635,25 @@ mod tests {
                 assert!(moved < 5e-4, "{} {moved}", p.freq_cy_px);
             }
             assert!((p.mtf_err - 0.003).abs() < 1e-12);
+        }
+    }
+
+    /// A blurred lens through a q75 file: a Gaussian MTF (MTF50 0.14 cy/px)
+    /// whose tail the quantiser left flat, 0 ± 10⁻⁹ wherever it is below
+    /// 0.02 (from 0.27 cy/px), the rest ± 0.003. Smoothed, the curve stays
+    /// within 0.005 of the closed form up to 0.25 cy/px (weighed by 1/σ²
+    /// alone, they pulled it 0.0056 off already at 0.125 cy/px).
+    #[test]
+    fn a_flattened_tail_does_not_pin_the_smoothing() {
+        let soft = |f: f64| (-(f / 0.14).powi(2) * std::f64::consts::LN_2).exp();
+        let mut pts = curve(soft, 0.003);
+        for p in pts.iter_mut().filter(|p| soft(p.freq_cy_px) < 0.02) {
+            (p.mtf, p.modulation, p.mtf_err) = (0.0, 0.0, 1e-9);
+        }
+        smooth_block_ripple(&mut pts, RIPPLE_RMS_MTF);
+        for p in pts.iter().filter(|p| p.freq_cy_px <= 0.25) {
+            let off = (p.mtf - soft(p.freq_cy_px)).abs();
+            assert!(off < 0.005, "{} {} {off}", p.freq_cy_px, p.mtf);
         }
     }
 
@@ -634,7 +670,7 @@ mod tests {
             (-2.0 * (x * 0.7).powi(2)).exp() * if x > 0.0 { x.sin() / x } else { 1.0 }
         };
         let mut pts = curve(soft, 0.003);
-        smooth_block_ripple(&mut pts);
+        smooth_block_ripple(&mut pts, RIPPLE_RMS_MTF);
         for p in pts.iter().filter(|p| !p.aliased) {
             let moved = (p.mtf - soft(p.freq_cy_px)).abs();
             let tol = if p.freq_cy_px <= 0.32 { 2.5e-4 } else { 1.1e-3 };
