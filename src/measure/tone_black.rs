@@ -369,6 +369,7 @@ mod tests {
             samples: 60 * n,
             clipped_high: 0,
             clipped_low: 0,
+            clipped: Vec::new(),
             parity: Vec::new(),
         }
     }

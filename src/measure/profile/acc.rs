@@ -258,11 +258,16 @@ pub(super) fn robust_from_extremes(acc: &mut [BinAcc]) -> Vec<(usize, f64, f64)>
 /// Appends the non-empty bins of `acc` to `prof`: each bin's mean sample
 /// position, its variance, and its robust mean (the plain mean for bins of
 /// fewer than 4 samples); with `parity`, each bin's mean pixel-parity
-/// patterns too.
-pub(super) fn finish(acc: &[BinAcc], prof: &mut Profile, parity: bool) {
+/// patterns too; where `prof` counts clipped samples, whether each bin
+/// holds one (its largest at `clip_level` or its smallest at or below 0).
+pub(super) fn finish(acc: &[BinAcc], prof: &mut Profile, parity: bool, clip_level: f32) {
+    let clipping = prof.clipped_high + prof.clipped_low > 0;
     for a in acc {
         if a.n == 0 {
             continue;
+        }
+        if clipping {
+            prof.clipped.push(a.hi[0] >= clip_level || a.lo[0] <= 0.0);
         }
         let c = a.n as f64;
         if parity {

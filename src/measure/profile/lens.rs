@@ -94,7 +94,7 @@ pub(super) fn bin_through_lens(
             }
         });
     }
-    super::acc::finish(&acc, &mut prof, super::wants_parity(planes));
+    super::acc::finish(&acc, &mut prof, super::wants_parity(planes), clip_level);
     prof
 }
 

@@ -136,6 +136,9 @@ pub struct Profile {
     pub clipped_high: usize,
     /// Samples at or below zero (black clipping).
     pub clipped_low: usize,
+    /// Whether each bin holds a clipped sample (at the clip level or at or
+    /// below zero); empty when no sample of the profile is clipped.
+    pub clipped: Vec<bool>,
     /// Each bin's mean of the pixel-parity patterns (−1)^x, (−1)^y and
     /// (−1)^(x+y) over its samples (x, y the photo pixel), for a single plane
     /// of step 1, where a demosaicked colour filter array leaves aliases
@@ -155,6 +158,11 @@ impl Profile {
         let r = self.bins_within(a, b);
         (!r.is_empty())
             .then(|| self.y[r.clone()].iter().map(|&y| g(y)).sum::<f64>() / r.len() as f64)
+    }
+
+    /// Whether bin `k` holds a clipped sample: its mean is not the light's.
+    pub fn is_clipped(&self, k: usize) -> bool {
+        self.clipped.get(k).copied().unwrap_or(false)
     }
 
     /// Fraction of the region's samples that are clipped (white or black).
@@ -288,7 +296,7 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
             region.visit(&mut add);
         }
     }
-    acc::finish(&acc, &mut prof, wants_parity(planes));
+    acc::finish(&acc, &mut prof, wants_parity(planes), opts.clip_level);
     prof
 }
 

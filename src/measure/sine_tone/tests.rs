@@ -36,6 +36,7 @@ fn profile(camera: impl Fn(f64) -> f64, light: impl Fn(f64) -> f64) -> (Profile,
         samples: 60 * n,
         clipped_high: 0,
         clipped_low: 0,
+        clipped: Vec::new(),
         parity: Vec::new(),
     };
     (prof, law)
