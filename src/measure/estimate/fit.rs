@@ -241,6 +241,10 @@ fn fit_window<const M: usize>(prof: &Profile, table: &PhaseTable, w: &Window) ->
             }
         })
         .collect();
+    // Too few bins left beside the clipped ones to judge the fit by its residuals.
+    if rows.iter().filter(|r| r.count > 0.0).count() < M + 2 {
+        return None;
+    }
     let mut ata = [[0.0f64; M]; M];
     let mut aty = [0.0f64; M];
     for r in &rows {
