@@ -386,15 +386,12 @@ pub fn refine_roi<S: AtImage + ?Sized>(
         if target.is_none() && before.as_ref().is_some_and(|b| lost_an_edge(b, &counts)) {
             break;
         }
-        before = Some(counts);
         if let Some(t) = target {
             // Both directions of the target's edges must be seen to fix the homography.
             let mut dirs = [0usize; 2];
-            for seg in &segs {
-                if edges.iter().any(|o| o.a == seg.a && o.b == seg.b) {
-                    let horizontal = (seg.b[0] - seg.a[0]).abs() >= (seg.b[1] - seg.a[1]).abs();
-                    dirs[usize::from(horizontal)] += 1;
-                }
+            for (seg, _) in segs.iter().zip(&counts).filter(|(_, n)| **n > 0) {
+                let horizontal = (seg.b[0] - seg.a[0]).abs() >= (seg.b[1] - seg.a[1]).abs();
+                dirs[usize::from(horizontal)] += 1;
             }
             if edges.len() < 12 || dirs[0] < 2 || dirs[1] < 2 {
                 return fail(format!(
@@ -440,6 +437,7 @@ pub fn refine_roi<S: AtImage + ?Sized>(
             }
         }
         h = fit_homography(h, &edges, &[]);
+        before = Some(counts);
     }
     let mut out = src.map(|p| h.apply(p));
     // Corners off by up to `search_px` slant an end by up to about twice that.

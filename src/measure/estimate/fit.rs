@@ -242,7 +242,8 @@ fn fit_window<const M: usize>(prof: &Profile, table: &PhaseTable, w: &Window) ->
         })
         .collect();
     // Too few bins left beside the clipped ones to judge the fit by its residuals.
-    if rows.iter().filter(|r| r.count > 0.0).count() < M + 2 {
+    let used = rows.iter().filter(|r| r.count > 0.0).count();
+    if used < M + 2 {
         return None;
     }
     let mut ata = [[0.0f64; M]; M];
@@ -331,7 +332,7 @@ fn fit_window<const M: usize>(prof: &Profile, table: &PhaseTable, w: &Window) ->
             meat[i][j] = meat[j][i];
         }
     }
-    let n = rows.iter().filter(|r| r.count > 0.0).count() as f64;
+    let n = used as f64;
     let sigma2 = rss / wsum.max(1e-300) * n / (n - M as f64).max(1.0);
     let cov = |i: usize| -> f64 {
         let mut acc = 0.0;
