@@ -626,7 +626,8 @@ def measure(img, corners, p, tmp):
             print(f"  black: not found: {b['why_not']}", flush=True)
         elif b:
             print(f"  black: used {b['used']} {100 * b['relative_to_mean']:+.2f} % ± {100 * b['offset_err'] / max(abs(b['offset']), 1e-12) * abs(b['relative_to_mean']):.2f} spread {b['light_spread']:.2f} resid {100 * b['residual']:.3f} % bands {b['bands']} {b['why_not']}", flush=True)
-    return (rms, e50, c["chart_modulation"] / 0.8 - 1, s50), None
+    cm_err = (c.get("chart_modulation_err") or float("nan")) / 0.8
+    return (rms, e50, c["chart_modulation"] / 0.8 - 1, s50, cm_err), None
 
 
 def main():
@@ -662,7 +663,7 @@ def main():
             if s is None:
                 print(f"{tag}: FAILED {err}", flush=True)
                 continue
-            print(f"{tag}: RMS {s[0]:.4f} MTF50 {100 * s[1]:+.2f} % (± {100 * s[3]:.2f} %) chart mod. {100 * s[2]:+.2f} %", flush=True)
+            print(f"{tag}: RMS {s[0]:.4f} MTF50 {100 * s[1]:+.2f} % (± {100 * s[3]:.2f} %) chart mod. {100 * s[2]:+.2f} % (± {100 * s[4]:.2f} %)", flush=True)
             res.append(s)
     if res:
         a = np.array(res)
