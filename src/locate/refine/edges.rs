@@ -93,11 +93,11 @@ pub(super) fn pick_peak(grad: &[f64], sign: f64, apart: usize) -> Option<f64> {
     if rival {
         return None;
     }
-    let lobe: Vec<f64> = grad.iter().map(|v| v * sign).collect();
-    Some(lobe_centroid(&lobe, imax))
+    Some(lobe_centroid(grad, sign, imax))
 }
 
-/// The sub-sample place of the peak of `g` at its local maximum `i`: the
+/// The sub-sample place of the peak of `sign·g` at its local maximum `i`
+/// (`0 < i < g.len() − 1`, as both callers ensure): the
 /// centroid of the samples around it above [`LOBE_LEVEL`] of the peak,
 /// weighted by their excess over that level, where they end inside `g`;
 /// else (a soft edge whose lobe the search window cuts) a parabola through
@@ -109,23 +109,25 @@ pub(super) fn pick_peak(grad: &[f64], sign: f64, apart: usize) -> Option<f64> {
 /// out of parallel, and the homography took that for a keystone). The
 /// thresholded centroid is unbiased for a symmetric lobe and follows the
 /// edge within 0.021 px there.
-fn lobe_centroid(g: &[f64], i: usize) -> f64 {
-    let floor = LOBE_LEVEL * g[i];
+fn lobe_centroid(g: &[f64], sign: f64, i: usize) -> f64 {
+    let at = |k: usize| g[k] * sign;
+    let floor = LOBE_LEVEL * at(i);
     let mut lo = i;
-    while lo > 0 && g[lo - 1] > floor {
+    while lo > 0 && at(lo - 1) > floor {
         lo -= 1;
     }
     let mut hi = i;
-    while hi + 1 < g.len() && g[hi + 1] > floor {
+    while hi + 1 < g.len() && at(hi + 1) > floor {
         hi += 1;
     }
     if lo == 0 || hi + 1 == g.len() {
-        return parabola_vertex(g, i);
+        return parabola_vertex([at(i - 1), at(i), at(i + 1)], i);
     }
     let (mut sum, mut moment) = (0.0, 0.0);
-    for (k, &v) in g.iter().enumerate().take(hi + 1).skip(lo) {
-        sum += v - floor;
-        moment += (v - floor) * k as f64;
+    for k in lo..=hi {
+        let excess = at(k) - floor;
+        sum += excess;
+        moment += excess * k as f64;
     }
     if sum > 0.0 { moment / sum } else { i as f64 }
 }
@@ -136,12 +138,8 @@ fn lobe_centroid(g: &[f64], i: usize) -> f64 {
 /// enough that the ends' bars were no longer followed (integration test).
 const LOBE_LEVEL: f64 = 0.4;
 
-/// The vertex of the parabola through `g` at `i − 1`, `i`, `i + 1` (within ±½ of `i`).
-fn parabola_vertex(g: &[f64], i: usize) -> f64 {
-    if i == 0 || i + 1 >= g.len() {
-        return i as f64;
-    }
-    let (g0, g1, g2) = (g[i - 1], g[i], g[i + 1]);
+/// The vertex of the parabola through `[g0, g1, g2]` at `i − 1`, `i`, `i + 1` (within ±½ of `i`).
+fn parabola_vertex([g0, g1, g2]: [f64; 3], i: usize) -> f64 {
     let den = g0 - 2.0 * g1 + g2;
     let sub = if den < 0.0 {
         0.5 * (g0 - g2) / den
@@ -173,9 +171,7 @@ pub(super) fn pick_first(grad: &[f64], from_start: bool) -> Option<f64> {
         if abs[i] >= thr && abs[i] >= abs[i - 1] && abs[i] >= abs[i + 1] {
             // The lobe of the gradient's own sign (a lobe of |g| could run
             // on into the next edge's).
-            let sign = grad[i].signum();
-            let lobe: Vec<f64> = grad.iter().map(|v| v * sign).collect();
-            return Some(lobe_centroid(&lobe, i));
+            return Some(lobe_centroid(grad, grad[i].signum(), i));
         }
     }
     None
