@@ -424,6 +424,7 @@ mod tests {
                 c0: 0.0,
                 c1: 1.0,
                 c2: 0.0,
+                persp: 0.0,
             },
             strip_unit: unit,
             strip_length: 100.0,

@@ -10,8 +10,9 @@ use rayon::prelude::*;
 
 /// Refines a phase law from local sine fits over the well-resolved part of the
 /// strip (contiguous from the low-frequency end, signal-to-noise ≥ 8, below
-/// 0.85 of the band limit). Returns the law, its RMS phase residual (cycles)
-/// and the number of fits that support it.
+/// 0.85 of the band limit), with the foreshortening along the strip that the
+/// phase shows ([`PhaseLaw::persp`]). Returns the law, its RMS phase residual
+/// (cycles) and the number of fits that support it.
 pub(super) fn refine_law(
     prof: &Profile,
     start: PhaseLaw,
@@ -69,7 +70,10 @@ pub(super) fn refine_law(
         if pts.len() < 6 {
             return result;
         }
-        let (l, rms) = law::fit_law(&pts, law.kind)?;
+        // The law with the foreshortening its phase shows (a keystone the
+        // corners miss, [`PhaseLaw::persp`]); the plain law where that fit fails.
+        let (l, rms) = law::fit_perspective(&pts, law.kind, s_lo.abs().max(s_hi.abs()))
+            .or_else(|| law::fit_law(&pts, law.kind))?;
         // Converged when the new law moves no fitted point's phase by 1/1000 cycle.
         let moved = pts
             .iter()

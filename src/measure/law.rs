@@ -31,11 +31,35 @@ pub struct PhaseLaw {
     pub c1: f64,
     /// Linear: half the frequency slope (cycles per unit²); log: the rate k (1/unit).
     pub c2: f64,
+    /// Foreshortening along the strip that its corners missed (1/unit): the
+    /// law above holds in x = s/(1 + persp·s), the chart's own coordinate
+    /// under a keystone the corners do not show (0: none; see [`fit_perspective`]).
+    #[serde(default)]
+    pub persp: f64,
 }
 
 impl PhaseLaw {
+    /// The law's own coordinate x (strip units) at s: s/(1 + persp·s).
+    fn x_of(&self, s: f64) -> f64 {
+        if self.persp == 0.0 {
+            s
+        } else {
+            s / (1.0 + self.persp * s)
+        }
+    }
+
+    /// dx/ds at s (1 without foreshortening).
+    fn dx_ds(&self, s: f64) -> f64 {
+        if self.persp == 0.0 {
+            1.0
+        } else {
+            (1.0 + self.persp * s).powi(-2)
+        }
+    }
+
     /// Phase (cycles) at s.
     pub fn phase(&self, s: f64) -> f64 {
+        let s = self.x_of(s);
         match self.kind {
             LawKind::Linear => self.c0 + self.c1 * s + self.c2 * s * s,
             LawKind::Log => self.c0 + self.c1 * expm1_over(self.c2, s),
@@ -44,8 +68,13 @@ impl PhaseLaw {
 
     /// Phase (cycles) and frequency (cycles per strip unit) at s, sharing one exponential.
     pub fn phase_freq(&self, s: f64) -> (f64, f64) {
+        let d = self.dx_ds(s);
+        let s = self.x_of(s);
         match self.kind {
-            LawKind::Linear => (self.phase(s), self.freq(s)),
+            LawKind::Linear => (
+                self.c0 + self.c1 * s + self.c2 * s * s,
+                (self.c1 + 2.0 * self.c2 * s) * d,
+            ),
             LawKind::Log => {
                 let em1 = (self.c2 * s).exp_m1();
                 let phase = if (self.c2 * s).abs() < 1e-12 {
@@ -53,14 +82,16 @@ impl PhaseLaw {
                 } else {
                     self.c0 + self.c1 * em1 / self.c2
                 };
-                (phase, self.c1 * (1.0 + em1))
+                (phase, self.c1 * (1.0 + em1) * d)
             }
         }
     }
 
     /// Frequency (cycles per strip unit) at s.
     pub fn freq(&self, s: f64) -> f64 {
-        match self.kind {
+        let d = self.dx_ds(s);
+        let s = self.x_of(s);
+        d * match self.kind {
             LawKind::Linear => self.c1 + 2.0 * self.c2 * s,
             LawKind::Log => self.c1 * (self.c2 * s).exp(),
         }
@@ -122,6 +153,12 @@ impl PhaseLaw {
                 }
             }
         };
+        // Back from the law's own coordinate: s = x/(1 − persp·x).
+        let s = if self.persp == 0.0 {
+            s
+        } else {
+            s / (1.0 - self.persp * s)
+        };
         s.is_finite().then_some(s)
     }
 }
@@ -149,6 +186,7 @@ pub fn fit_law(pts: &[(f64, f64, f64)], kind: LawKind) -> Option<(PhaseLaw, f64)
                     c0: c[0],
                     c1: c[1],
                     c2: c[2],
+                    persp: 0.0,
                 },
                 rms,
             ))
@@ -202,11 +240,70 @@ pub fn fit_law(pts: &[(f64, f64, f64)], kind: LawKind) -> Option<(PhaseLaw, f64)
                     c0: c[0],
                     c1: c[1],
                     c2: k,
+                    persp: 0.0,
                 },
                 rms,
             ))
         }
     }
+}
+
+/// Largest foreshortening [`fit_perspective`] tries: |persp|·s_max (1/unit·unit).
+const MAX_PERSP_SPAN: f64 = 0.25;
+
+/// [`fit_law`] with the foreshortening `persp` fitted too (weighted least
+/// squares over the law's coefficients and persp); returns it and its
+/// weighted RMS residual (cycles). persp is found by parabolic steps on the
+/// residual (it is smooth in persp), kept to |persp|·s_max ≤ 0.25 with s_max
+/// the farthest of the points and `reach` (strip units: where the law will be used).
+pub fn fit_perspective(
+    pts: &[(f64, f64, f64)],
+    kind: LawKind,
+    reach: f64,
+) -> Option<(PhaseLaw, f64)> {
+    let smax = pts.iter().map(|p| p.0.abs()).fold(reach.abs(), f64::max);
+    if pts.len() < 5 || !(smax > 0.0 && smax.is_finite()) {
+        return None;
+    }
+    let lim = MAX_PERSP_SPAN / smax;
+    let fit_at = |p: f64| {
+        let xs: Vec<_> = pts
+            .iter()
+            .map(|&(s, y, w)| (s / (1.0 + p * s), y, w))
+            .collect();
+        fit_law(&xs, kind).map(|(l, r)| (PhaseLaw { persp: p, ..l }, r))
+    };
+    let cost = |r: &Option<(PhaseLaw, f64)>| r.as_ref().map_or(f64::INFINITY, |x| x.1);
+    let mut best = fit_at(0.0)?;
+    let mut centre = 0.0;
+    let mut h = 0.02 / smax;
+    for _ in 0..5 {
+        let (a, b) = (fit_at(centre - h), fit_at(centre + h));
+        let c0 = best.1;
+        let (ca, cb) = (cost(&a), cost(&b));
+        for r in [a, b].into_iter().flatten() {
+            if r.1 < best.1 {
+                best = r;
+            }
+        }
+        // Vertex of the parabola through the three residuals (squared: quadratic in persp).
+        let v = parabola_min([
+            (centre - h, ca * ca),
+            (centre, c0 * c0),
+            (centre + h, cb * cb),
+        ])
+        .filter(|v| v.is_finite())
+        .unwrap_or(best.0.persp)
+        .clamp(-lim, lim);
+        if let Some(r) = fit_at(v)
+            && r.1 < best.1
+        {
+            best = r;
+        }
+        centre = best.0.persp;
+        h *= 0.25;
+    }
+    Some(best)
 }
 
 /// The abscissa of the vertex of the parabola through three points (None when they are collinear).
@@ -297,12 +394,14 @@ mod tests {
             c0: 0.3,
             c1: 0.01,
             c2: 2e-5,
+            persp: 0.0,
         };
         let log = PhaseLaw {
             kind: LawKind::Log,
             c0: -0.1,
             c1: 0.01,
             c2: 0.0025,
+            persp: 0.0,
         };
         for law in [lin, log] {
             let pts: Vec<_> = (0..200)
@@ -332,17 +431,28 @@ mod tests {
             }
             0.5 * (a + b)
         };
+        // The last entries are foreshortened (persp·1600 = ±0.25, the fit's limit, and small).
         let laws = [
-            (LawKind::Linear, 0.3, 0.01, 2e-5),
-            (LawKind::Linear, -2.0, 0.02, 1e-14),
-            (LawKind::Linear, 0.0, 0.5, 0.0),
-            (LawKind::Linear, 0.1, 0.4, -5e-5), // falling chirp, monotone on [0, 1600]
-            (LawKind::Log, -0.1, 0.01, 0.0025),
-            (LawKind::Log, 0.2, 0.05, 1e-13),
-            (LawKind::Log, 0.0, 1e-3, 0.009),
+            (LawKind::Linear, 0.3, 0.01, 2e-5, 0.0),
+            (LawKind::Linear, -2.0, 0.02, 1e-14, 0.0),
+            (LawKind::Linear, 0.0, 0.5, 0.0, 0.0),
+            (LawKind::Linear, 0.1, 0.4, -5e-5, 0.0), // falling chirp, monotone on [0, 1600]
+            (LawKind::Log, -0.1, 0.01, 0.0025, 0.0),
+            (LawKind::Log, 0.2, 0.05, 1e-13, 0.0),
+            (LawKind::Log, 0.0, 1e-3, 0.009, 0.0),
+            (LawKind::Linear, 0.3, 0.01, 2e-5, 0.25 / 1600.0),
+            (LawKind::Linear, 0.3, 0.01, 2e-5, -0.25 / 1600.0),
+            (LawKind::Log, -0.1, 0.01, 0.0025, 1e-3 / 1600.0),
+            (LawKind::Log, 0.0, 1e-3, 0.009, -0.25 / 1600.0),
         ];
-        for (kind, c0, c1, c2) in laws {
-            let l = PhaseLaw { kind, c0, c1, c2 };
+        for (kind, c0, c1, c2, persp) in laws {
+            let l = PhaseLaw {
+                kind,
+                c0,
+                c1,
+                c2,
+                persp,
+            };
             for s in [0.0, 1e-9, 3.7, 777.0, 1599.0, 1600.0] {
                 let phi = l.phase(s);
                 let got = l.s_at_phase(phi, 0.0, 1600.0);
@@ -362,5 +472,73 @@ mod tests {
             let got = l.s_at_phase(l.phase(0.0) - 5.0, 0.0, 1600.0);
             assert!(got.abs() < 1e-9, "{l:?}: {got}");
         }
+    }
+
+    /// A sweep seen through a keystone its corners missed: the printed law in
+    /// the chart's coordinate x, sampled at strip positions s with
+    /// x = s/(1 + p·s), written out here by hand; the fit finds p, the
+    /// frequency matches a central difference of that phase, and the phase's
+    /// inverse lands back on s.
+    #[test]
+    fn a_foreshortening_the_corners_missed_is_found_from_the_phase() {
+        let len = 1600.0;
+        let linear = |x: f64| 0.3 + 0.01 * x + 2e-5 * x * x;
+        let log = |x: f64| -0.1 + 0.01 * ((0.0025 * x).exp() - 1.0) / 0.0025;
+        for span in [-0.2, -0.02, -0.005, 0.0, 0.004, 0.03, 0.2] {
+            let p = span / len;
+            let x = |s: f64| s / (1.0 + p * s);
+            for (kind, phi) in [
+                (LawKind::Linear, &linear as &dyn Fn(f64) -> f64),
+                (LawKind::Log, &log),
+            ] {
+                let pts: Vec<_> = (0..=200)
+                    .map(|i| {
+                        let s = i as f64 * 8.0;
+                        (s, phi(x(s)), 1.0)
+                    })
+                    .collect();
+                let (fit, rms) = fit_perspective(&pts, kind, len).unwrap();
+                assert!(rms < 1e-4, "{kind:?} {span}: RMS {rms}");
+                assert!(
+                    (fit.persp * len - span).abs() < 1e-4,
+                    "{kind:?} {span}: {}",
+                    fit.persp * len
+                );
+                for s in [0.0, 400.0, 1599.0] {
+                    let h = 1e-3;
+                    let want = (phi(x(s + h)) - phi(x(s - h))) / (2.0 * h);
+                    let got = fit.freq(s);
+                    assert!(
+                        (got / want - 1.0).abs() < 1e-5,
+                        "{kind:?} {span} s={s}: {got} vs {want}"
+                    );
+                }
+                let s = fit.s_at_phase(phi(x(777.0)), 0.0, len);
+                assert!((s - 777.0).abs() < 1e-3, "{kind:?} {span}: {s}");
+            }
+        }
+    }
+
+    /// Without foreshortening, the fit with it gives the plain law back:
+    /// noise-free phases of either family, and a handful of points.
+    #[test]
+    fn no_foreshortening_is_read_where_there_is_none() {
+        let lin = PhaseLaw {
+            kind: LawKind::Linear,
+            c0: 0.3,
+            c1: 0.01,
+            c2: 2e-5,
+            persp: 0.0,
+        };
+        let pts: Vec<_> = (0..5)
+            .map(|i| (i as f64 * 300.0, lin.phase(i as f64 * 300.0), 1.0))
+            .collect();
+        let (fit, rms) = fit_perspective(&pts, LawKind::Linear, 0.0).unwrap();
+        assert!(
+            rms < 1e-6 && (fit.persp * 1200.0).abs() < 1e-6,
+            "{fit:?} {rms}"
+        );
+        assert!(fit_perspective(&pts[..4], LawKind::Linear, 0.0).is_none());
+        assert!(fit_perspective(&[(0.0, 0.0, 1.0); 6], LawKind::Linear, 0.0).is_none());
     }
 }

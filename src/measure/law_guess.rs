@@ -322,6 +322,7 @@ mod tests {
             c0: 0.1,
             c1: 0.01,
             c2: 0.4 / 4000.0 / 2.0,
+            persp: 0.0,
         };
         let n = 4000 * 4;
         let prof = Profile {

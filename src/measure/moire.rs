@@ -201,6 +201,7 @@ mod tests {
                 c0: 0.0,
                 c1: 0.1,
                 c2: 0.0,
+                persp: 0.0,
             },
             strip_unit: "px",
             strip_length: 1.0,

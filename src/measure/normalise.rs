@@ -198,6 +198,7 @@ mod tests {
             c0: 0.0,
             c1: 0.006,
             c2: 0.5 * 2.1e-4,
+            persp: 0.0,
         };
         let s: Vec<f64> = (0..5200).map(|i| 0.125 + 0.25 * i as f64).collect();
         let y = s
@@ -268,6 +269,7 @@ mod tests {
         let flat = PhaseLaw {
             c1: 0.0,
             c2: 0.0,
+            persp: 0.0,
             ..law
         };
         assert!(

@@ -65,6 +65,7 @@ pub fn measure_patches(
                 c0: 0.0,
                 c1: p.freq_cy_mm,
                 c2: 0.0,
+                persp: 0.0,
             };
             let table = PhaseTable::new(&prof, &law);
             let (a, b) = (prof.s[0], prof.s[prof.s.len() - 1]);

@@ -391,12 +391,14 @@ fn target_law(sw: &Sweep) -> PhaseLaw {
             c0: 0.0,
             c1: sw.f_min_cy_mm,
             c2: (sw.f_max_cy_mm - sw.f_min_cy_mm) / (2.0 * l),
+            persp: 0.0,
         },
         SweepLaw::Log => PhaseLaw {
             kind: LawKind::Log,
             c0: 0.0,
             c1: sw.f_min_cy_mm,
             c2: (sw.f_max_cy_mm / sw.f_min_cy_mm).ln() / l,
+            persp: 0.0,
         },
     }
 }

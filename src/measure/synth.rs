@@ -322,6 +322,7 @@ pub fn standard_cases() -> Vec<SynthShot> {
         c0: 0.0,
         c1: 0.004,
         c2: k,
+        persp: 0.0,
     };
     let base = SynthShot {
         name: "noiseless".into(),
@@ -389,6 +390,7 @@ pub fn big_shot() -> SynthShot {
         strip_width: 400.0,
         law: super::PhaseLaw {
             c2: (0.6f64 / 0.004).ln() / 5600.0,
+            persp: 0.0,
             ..base.law
         },
         ..base
@@ -408,6 +410,7 @@ pub fn wide_strip_shot() -> SynthShot {
         strip_width: 1700.0,
         law: super::PhaseLaw {
             c2: (0.6f64 / 0.004).ln() / 5200.0,
+            persp: 0.0,
             ..big.law
         },
         jpeg_quality: Some(92),
@@ -444,6 +447,7 @@ pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
         c0: 0.0,
         c1: f0,
         c2: (f1 / f0).ln() / len,
+        persp: 0.0,
     };
     let base = SynthShot {
         name: String::new(),
@@ -490,6 +494,7 @@ pub fn nuisance_cases(variant: u64) -> Vec<SynthShot> {
                 c0: 0.0,
                 c1: f0,
                 c2: (0.4 - f0) / (2.0 * len),
+                persp: 0.0,
             },
             ..base.clone()
         },

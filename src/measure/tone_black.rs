@@ -383,6 +383,7 @@ mod tests {
             c0: 0.0,
             c1: 0.008,
             c2: (0.3f64 / 0.008).ln() / LEN,
+            persp: 0.0,
         };
         let sine = |s: f64| 0.5 * (1.0 + 0.8 * (std::f64::consts::TAU * law.phase(s)).sin());
         let mut prof = binned(sine, light);
@@ -474,6 +475,7 @@ mod tests {
             c0: 0.0,
             c1: 0.008,
             c2: (0.3f64 / 0.008).ln() / LEN,
+            persp: 0.0,
         };
         // Bands outside the frame bin nothing.
         let empty = [Profile::default(), Profile::default()];

@@ -137,6 +137,7 @@ mod tests {
             c0: 0.0,
             c1: f0,
             c2: 0.5 * slope,
+            persp: 0.0,
         }
     }
 

@@ -89,6 +89,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                     "phase_c0_cycles": c.law.c0,
                     "freq_start_cy_per_unit": c.law.c1,
                     "c2": c.law.c2,
+                    "foreshortening_per_unit": c.law.persp,
                 },
             })
         })

@@ -22,6 +22,7 @@ mod colour_moire;
 mod demosaic_luma;
 mod ends_near_axis;
 mod exif_jpeg;
+mod foreshortening_unseen;
 mod fuzz_slice;
 mod gui_api;
 mod gui_batch;

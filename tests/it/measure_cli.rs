@@ -21,6 +21,7 @@ fn shot(mean: f64, contrast: f64) -> SynthShot {
             c0: 0.0,
             c1: 0.006,
             c2: (0.6f64 / 0.006).ln() / len,
+            persp: 0.0,
         },
         mean,
         contrast,

@@ -153,9 +153,11 @@ fn an_undistorted_target_shot_gets_no_model() {
 
 /// A camera-raw DNG (RGGB, simulated) of a strip bent by a 3.9 % pincushion,
 /// strip corners only: the distortion is found in the green sites and MTF50
-/// matches the undistorted shot's; without it MTF50 reads 2.3 % high (4 %
+/// matches the undistorted shot's. Without it MTF50 read 2.3 % high (4 %
 /// before session 27 placed each point where its window reads it), beyond
-/// the 1 % bar.
+/// the 1 % bar; since session 34 the phase law's foreshortening, read from
+/// the phase, follows most of the pincushion's stretch along the strip
+/// (−0.2 %), so ignoring it now stays within the bar too.
 #[test]
 fn a_raw_strip_gives_the_distortion_from_its_green_sites() {
     let dir = tempfile::tempdir().unwrap();
@@ -226,5 +228,5 @@ fn a_raw_strip_gives_the_distortion_from_its_green_sites() {
         (m_found / m_plain - 1.0).abs() < 0.01,
         "{m_found} vs {m_plain}"
     );
-    assert!(m_off / m_plain - 1.0 > 0.015, "{m_off} vs {m_plain}");
+    assert!((m_off / m_plain - 1.0).abs() < 0.01, "{m_off} vs {m_plain}");
 }

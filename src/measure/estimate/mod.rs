@@ -126,6 +126,7 @@ pub(crate) mod tests_support {
             c0: 0.2,
             c1: 0.01,
             c2: 0.29 / l / 2.0,
+            persp: 0.0,
         };
         let truth = move |s: f64| 0.6 * (1.0 - 0.8 * s / l);
         let n = (l / 0.25) as usize;
@@ -165,6 +166,7 @@ pub(crate) mod tests_support {
             c0: 0.0,
             c1: f0,
             c2: rate / 2.0,
+            persp: 0.0,
         };
         let n = (length / 0.25) as usize;
         let s: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) * 0.25).collect();

@@ -15,6 +15,7 @@ fn profile(camera: impl Fn(f64) -> f64, light: impl Fn(f64) -> f64) -> (Profile,
         c0: 0.0,
         c1: 0.008,
         c2: k,
+        persp: 0.0,
     };
     let n = (len / 0.25) as usize;
     let s: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) * 0.25).collect();
