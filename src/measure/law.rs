@@ -252,10 +252,11 @@ pub fn fit_law(pts: &[(f64, f64, f64)], kind: LawKind) -> Option<(PhaseLaw, f64)
 const MAX_PERSP_SPAN: f64 = 0.25;
 
 /// [`fit_law`] with the foreshortening `persp` fitted too (weighted least
-/// squares over the law's coefficients and persp); returns it and its
-/// weighted RMS residual (cycles). persp is found by parabolic steps on the
-/// residual (it is smooth in persp), kept to |persp|·s_max ≤ 0.25 with s_max
-/// the farthest of the points and `reach` (strip units: where the law will be used).
+/// squares over the law's three coefficients and persp, by Gauss–Newton
+/// steps from the plain law, each halved until the residual falls); returns
+/// it and its weighted RMS residual (cycles), never worse than the plain
+/// law's. persp is kept to |persp|·s_max ≤ 0.25 with s_max the farthest of
+/// the points and `reach` (strip units: where the law will be used).
 pub fn fit_perspective(
     pts: &[(f64, f64, f64)],
     kind: LawKind,
@@ -266,44 +267,94 @@ pub fn fit_perspective(
         return None;
     }
     let lim = MAX_PERSP_SPAN / smax;
-    let fit_at = |p: f64| {
-        let xs: Vec<_> = pts
-            .iter()
-            .map(|&(s, y, w)| (s / (1.0 + p * s), y, w))
-            .collect();
-        fit_law(&xs, kind).map(|(l, r)| (PhaseLaw { persp: p, ..l }, r))
+    let wsum: f64 = pts.iter().map(|p| p.2).sum();
+    let rss = |l: &PhaseLaw| -> f64 {
+        pts.iter()
+            .map(|&(s, y, w)| w * (y - l.phase(s)).powi(2))
+            .sum()
     };
-    let cost = |r: &Option<(PhaseLaw, f64)>| r.as_ref().map_or(f64::INFINITY, |x| x.1);
-    let mut best = fit_at(0.0)?;
-    let mut centre = 0.0;
-    let mut h = 0.02 / smax;
-    for _ in 0..5 {
-        let (a, b) = (fit_at(centre - h), fit_at(centre + h));
-        let c0 = best.1;
-        let (ca, cb) = (cost(&a), cost(&b));
-        for r in [a, b].into_iter().flatten() {
-            if r.1 < best.1 {
-                best = r;
+    let (mut best, _) = fit_law(pts, kind)?;
+    let mut best_rss = rss(&best);
+    // Levenberg–Marquardt: λ on the scaled normal equations' diagonal, cut
+    // tenfold after a step that lowers the residual, raised tenfold until one does.
+    let mut lambda = 1e-3;
+    for _ in 0..40 {
+        let mut a = [[0.0; 4]; 4];
+        let mut b = [0.0; 4];
+        for &(s, y, w) in pts {
+            let (j, phi) = gradient(&best, s);
+            let r = y - phi;
+            for m in 0..4 {
+                b[m] += w * j[m] * r;
+                for n in 0..4 {
+                    a[m][n] += w * j[m] * j[n];
+                }
             }
         }
-        // Vertex of the parabola through the three residuals (squared: quadratic in persp).
-        let v = parabola_min([
-            (centre - h, ca * ca),
-            (centre, c0 * c0),
-            (centre + h, cb * cb),
-        ])
-        .filter(|v| v.is_finite())
-        .unwrap_or(best.0.persp)
-        .clamp(-lim, lim);
-        if let Some(r) = fit_at(v)
-            && r.1 < best.1
-        {
-            best = r;
+        // Columns scaled to unit diagonal.
+        let sc: [f64; 4] = std::array::from_fn(|m| a[m][m].sqrt().max(1e-300));
+        let b: [f64; 4] = std::array::from_fn(|m| b[m] / sc[m]);
+        let mut stepped = false;
+        while lambda < 1e8 {
+            let a: [[f64; 4]; 4] = std::array::from_fn(|m| {
+                std::array::from_fn(|n| {
+                    a[m][n] / (sc[m] * sc[n]) + if m == n { lambda } else { 0.0 }
+                })
+            });
+            let Some(d) = crate::linalg::solve(a, b, 1e-15) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let l = PhaseLaw {
+                c0: best.c0 + d[0] / sc[0],
+                c1: best.c1 + d[1] / sc[1],
+                c2: best.c2 + d[2] / sc[2],
+                persp: (best.persp + d[3] / sc[3]).clamp(-lim, lim),
+                ..best
+            };
+            let r = rss(&l);
+            if r < best_rss {
+                stepped = (best_rss - r) > 1e-12 * best_rss;
+                best = l;
+                best_rss = r;
+                lambda = (lambda * 0.1).max(1e-9);
+                break;
+            }
+            lambda *= 10.0;
         }
-        centre = best.0.persp;
-        h *= 0.25;
+        if !stepped {
+            break;
+        }
     }
-    Some(best)
+    Some((best, (best_rss / wsum.max(1e-300)).sqrt()))
+}
+
+/// The law's phase at s and its derivatives there in (c0, c1, c2, persp).
+fn gradient(l: &PhaseLaw, s: f64) -> ([f64; 4], f64) {
+    let q = 1.0 + l.persp * s;
+    let x = s / q;
+    // dx/dpersp
+    let dx = -(s * s) / (q * q);
+    match l.kind {
+        LawKind::Linear => (
+            [1.0, x, x * x, (l.c1 + 2.0 * l.c2 * x) * dx],
+            l.c0 + l.c1 * x + l.c2 * x * x,
+        ),
+        LawKind::Log => {
+            let k = l.c2;
+            let e1 = expm1_over(k, x);
+            // d/dk of (e^{kx} − 1)/k: (x·e^{kx} − e1)/k, or its series near k·x = 0.
+            let de = if (k * x).abs() < 1e-4 {
+                0.5 * x * x * (1.0 + 2.0 * k * x / 3.0)
+            } else {
+                (x * (k * x).exp() - e1) / k
+            };
+            (
+                [1.0, e1, l.c1 * de, l.c1 * (k * x).exp() * dx],
+                l.c0 + l.c1 * e1,
+            )
+        }
+    }
 }
 
 /// The abscissa of the vertex of the parabola through three points (None when they are collinear).
