@@ -42,7 +42,7 @@ def assert_summary_matches(py_summary, cli_summary, tol=1e-12):
             assert (pv is None) == (cv is None), k
             if pv is not None:
                 assert close(pv["cy_px"], cv["cy_px"], tol), (k, pv, cv)
-        for k in ("phase_c0_cycles", "freq_start_cy_per_unit", "c2"):
+        for k in ("phase_c0_cycles", "freq_start_cy_per_unit", "c2", "foreshortening_per_unit"):
             assert close(p["sweep_law"][k], c["sweep_law"][k], tol), k
         assert p["points"] == c["points"]
     for k, v in enumerate(cli_summary["roi_px"]):
