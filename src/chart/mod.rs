@@ -1,6 +1,6 @@
 //! Printable sine-sweep and sine-patch charts at true physical size (PNG, TIFF, PDF).
 //!
-//! [`layout`] turns a [`ChartSpec`] into a [`Chart`]: the target description
+//! [`layout`](fn@layout) turns a [`ChartSpec`] into a [`Chart`]: the target description
 //! (`Target`, the single truth of what is printed) plus the human-readable
 //! marks (frequency ticks and numbers, title) that sit only where the
 //! description leaves background. [`write_chart`] streams the raster row by

@@ -3,6 +3,7 @@
 //! sampled at, and the local-frequency check (the image's own frequency
 //! against the law) that flags aliasing.
 
+use super::Curve;
 use super::estimate::fit::{LocalFit, PhaseTable, local_fit};
 use super::law::{self, PhaseLaw};
 use super::profile::Profile;
@@ -174,4 +175,31 @@ pub(super) fn dev_at(dev: &[(f64, f64)], s: f64) -> Option<f64> {
         .filter_map(|&k| dev.get(k))
         .min_by(|a, b| (a.0 - s).abs().total_cmp(&(b.0 - s).abs()))
         .map(|d| d.1)
+}
+
+/// Foreshortening from end to end (|persp|·length) from which a note names it.
+const NOTED_FORESHORTENING: f64 = 0.002;
+
+/// A note where the sweep's phase shows the strip foreshortened beyond what
+/// its corners say (a keystone they miss), with how far off that puts the
+/// far end's height (px; `margin` is the fraction of the strip's height left
+/// out along each long edge); None below 0.2 % from end to end.
+pub(super) fn foreshortening_note(c: &Curve, margin: f64) -> Option<String> {
+    let span = c.law.persp * c.strip_length;
+    if !(span.abs() >= NOTED_FORESHORTENING) {
+        return None;
+    }
+    let r = &c.region_px;
+    let far = (r[2][0] - r[1][0]).hypot(r[2][1] - r[1][1]) / (1.0 - 2.0 * margin).max(0.1);
+    Some(format!(
+        "the sweep's phase shows the strip {:.2} % {} from end to end than its corners say \
+         (its far end's height off by ≈ {:.2} px); the frequencies follow the phase",
+        100.0 * span.abs(),
+        if span > 0.0 {
+            "less foreshortened"
+        } else {
+            "more foreshortened"
+        },
+        span.abs() * far
+    ))
 }

@@ -488,7 +488,7 @@ fn measure_planes_lens(
         for r in measured {
             let (c, note) = r?;
             notes.extend(note);
-            if let Some(line) = strip::foreshortening_note(&c, opts.margin) {
+            if let Some(line) = frequency::foreshortening_note(&c, opts.margin) {
                 notes.push(format!("{name}/{}: {line}", c.sweep_id));
             }
             if c.clipped_fraction > 0.0 {

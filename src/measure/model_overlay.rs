@@ -78,7 +78,7 @@ fn describe<'a>(specs: impl Iterator<Item = (&'a str, &'a str)>) -> String {
 /// A model system ready to evaluate at image frequencies.
 #[derive(Debug)]
 pub struct ModelOverlay {
-    /// Display name (plot legend: "model: <name>").
+    /// Display name (plot legend: "model: `<name>`").
     pub name: String,
     /// The factors as `kind spec`, joined by " × ".
     pub description: String,

@@ -16,7 +16,7 @@ use serde_json::{Value, json};
 /// A dashed model curve for the MTF plot.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ModelCurve {
-    /// Legend label ("model: <name>").
+    /// Legend label ("model: `<name>`").
     pub label: String,
     /// (frequency cycles/pixel, MTF) samples.
     pub points: Vec<(f64, f64)>,

@@ -1,7 +1,7 @@
 //! Camera simulator: renders a target description through a modelled camera
 //! and writes the exact truth beside the photo.
 //!
-//! [`render`] places the chart in the frame ([`placement`]), renders the
+//! [`render`](fn@render) places the chart in the frame ([`placement`]), renders the
 //! chart's reflectance through the system OTF and the pixel aperture
 //! ([`render`](mod@render)), applies exposure, illumination fall-off and sensor
 //! noise ([`noise`]), and computes the truth ([`truth`]); [`write_shot`] encodes

@@ -6,7 +6,7 @@
 //! Sharpening is the linear operator x + a·(x − g∗x) with g a sampled,
 //! normalised Gaussian applied separably (rows, then columns; edges
 //! replicated). Its transfer at image frequency (u, v) cy/px is exactly
-//! 1 + a·(1 − G(u)·G(v)) with G(f) = Σₙ g[n]·cos(2πfn), the kernel's discrete
+//! 1 + a·(1 − G(u)·G(v)) with G(f) = Σₙ g\[n\]·cos(2πfn), the kernel's discrete
 //! Fourier transform: for radii near a pixel the sampled kernel aliases, so
 //! the continuous exp(−2π²r²f²) would be off by up to 0.7 % of a at Nyquist.
 //! The illumination and the light's colour multiply the signal and change no

@@ -142,7 +142,7 @@ pub struct Profile {
     /// Each bin's mean of the pixel-parity patterns (−1)^x, (−1)^y and
     /// (−1)^(x+y) over its samples (x, y the photo pixel), for a single plane
     /// of step 1, where a demosaicked colour filter array leaves aliases
-    /// locked to the pixel grid (see [`wants_parity`]); empty otherwise.
+    /// locked to the pixel grid (see `wants_parity`); empty otherwise.
     pub parity: Vec<[f64; 3]>,
 }
 

@@ -47,7 +47,7 @@ pub struct GreenBalance {
 /// taken as not converted (outside the read rows) and left out, as are sites
 /// whose five samples include one at or above `clip_level`. `None` (nothing
 /// changed) when the lattices are not two step-2 green lattices a pixel apart
-/// diagonally, when fewer than [`MIN_SITES`] sites or [`MIN_BLOCKS`] blocks
+/// diagonally, when fewer than `MIN_SITES` sites or `MIN_BLOCKS` blocks
 /// are usable, or when the gain found is absurd (outside 0.5–2: not a gain
 /// imbalance).
 pub fn balance(first: &Plane, second: &mut Plane, clip_level: f32) -> Option<GreenBalance> {
