@@ -203,7 +203,7 @@ fn lsq2(pts: &[(f64, f64, f64)], k: f64) -> Option<([f64; 2], f64)> {
     Some(([c[0], c[1]], r))
 }
 
-/// Weighted least squares with up to three basis functions (a zero third column is dropped).
+/// Weighted least squares with up to three basis functions (a zero third column is dropped); None without weight or with a non-finite solution.
 fn lsq(pts: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<([f64; 3], f64)> {
     // Each point's basis values once (they may cost an exponential each).
     let xs: Vec<[f64; 3]> = pts.iter().map(|p| basis(p.0)).collect();
@@ -221,7 +221,14 @@ fn lsq(pts: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<([f64
         }
         wsum += w;
     }
+    // No weight, or a non-finite sample: no fit (rather than a NaN law).
+    if !(wsum > 0.0) {
+        return None;
+    }
     let c = solve(&mut a, &mut r, n)?;
+    if !c.iter().all(|x| x.is_finite()) {
+        return None;
+    }
     let rss: f64 = pts
         .iter()
         .zip(&xs)
@@ -370,5 +377,87 @@ mod tests {
         );
         assert!(fit_perspective(&pts[..4], LawKind::Linear, 0.0).is_none());
         assert!(fit_perspective(&[(0.0, 0.0, 1.0); 6], LawKind::Linear, 0.0).is_none());
+    }
+
+    /// Stiff and broken inputs: a log sweep rising e^40-fold, phases with
+    /// jumps of whole cycles, weights from 1e-9 to 1e9, zero weights, a
+    /// reach far beyond the points, non-finite phases. Each fit is either
+    /// refused or finite, never worse than the plain law, and its
+    /// foreshortening stays inside the bound.
+    #[test]
+    fn stiff_and_broken_phases_give_a_finite_law_or_none() {
+        let steep = |s: f64| 0.01 * ((0.025 * s).exp() - 1.0) / 0.025;
+        // (points, reach)
+        type Case = (Vec<(f64, f64, f64)>, f64);
+        let cases: Vec<Case> = vec![
+            (
+                (0..=160)
+                    .map(|i| (i as f64 * 10.0, steep(i as f64 * 10.0), 1.0))
+                    .collect(),
+                1600.0,
+            ),
+            (
+                (0..=160)
+                    .map(|i| {
+                        let s = i as f64 * 10.0;
+                        (
+                            s,
+                            0.3 + 0.01 * s + 2e-5 * s * s + (i % 7 == 3) as u8 as f64,
+                            1.0,
+                        )
+                    })
+                    .collect(),
+                1600.0,
+            ),
+            (
+                (0..=160)
+                    .map(|i| {
+                        let s = i as f64 * 10.0;
+                        (s, 0.01 * s + 1e-5 * s * s, 10f64.powi(i % 19 - 9))
+                    })
+                    .collect(),
+                1e9,
+            ),
+            (
+                (0..=20).map(|i| (i as f64, 0.1 * i as f64, 0.0)).collect(),
+                20.0,
+            ),
+            (
+                (0..=20)
+                    .map(|i| {
+                        (
+                            i as f64,
+                            if i == 7 { f64::NAN } else { 0.1 * i as f64 },
+                            1.0,
+                        )
+                    })
+                    .collect(),
+                20.0,
+            ),
+        ];
+        for (n, (pts, reach)) in cases.iter().enumerate() {
+            for kind in [LawKind::Linear, LawKind::Log] {
+                let Some((l, rms)) = fit_perspective(pts, kind, *reach) else {
+                    continue;
+                };
+                let smax = pts.iter().map(|p| p.0.abs()).fold(reach.abs(), f64::max);
+                assert!(
+                    l.c0.is_finite() && l.c1.is_finite() && l.c2.is_finite() && l.persp.is_finite(),
+                    "case {n} {kind:?}: {l:?}"
+                );
+                assert!(
+                    (l.persp * smax).abs() <= MAX_PERSP_SPAN + 1e-12,
+                    "case {n} {kind:?}: {l:?}"
+                );
+                if let Some((_, plain)) = fit_law(pts, kind)
+                    && plain.is_finite()
+                {
+                    assert!(
+                        rms <= plain * (1.0 + 1e-9),
+                        "case {n} {kind:?}: {rms} > {plain}"
+                    );
+                }
+            }
+        }
     }
 }
