@@ -27,11 +27,7 @@ use sweepmtf::simulate::demo::demo_target_for;
 use sweepmtf::simulate::{BayerOrder, Camera, Demosaic, Shot, encode::PhotoFormat, render};
 use sweepmtf::target::SweepLaw;
 
-/// The f/4 APS-C system the shipped samples use (diffraction × square pixel).
-fn system() -> sweepmtf::model::System {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("targets/systems/aps_c_f4.toml");
-    sweepmtf::model::System::from_file(&p).unwrap()
-}
+use crate::system_support::aps_c_f4 as system;
 
 /// 1000×600 frame, chart 840 px wide, shot noise (full well 20000 e⁻, read noise 4 e⁻).
 fn camera() -> Camera {

@@ -21,11 +21,7 @@ use sweepmtf::simulate::demo::demo_target_for;
 use sweepmtf::simulate::{Camera, encode::PhotoFormat, mtf_at, render};
 use sweepmtf::target::SweepLaw;
 
-/// The f/4 APS-C system the shipped samples use (diffraction × square pixel).
-fn system() -> sweepmtf::model::System {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("targets/systems/aps_c_f4.toml");
-    sweepmtf::model::System::from_file(&p).unwrap()
-}
+use crate::system_support::aps_c_f4 as system;
 
 /// (worst |MTF − truth| over 0.40–0.49 cy/px and where, largest corner move
 /// along the strip in px) of a 16-bit shot turned `deg`, with or without the

@@ -21,11 +21,7 @@ use sweepmtf::simulate::demo::demo_target_for;
 use sweepmtf::simulate::{Camera, encode::PhotoFormat, mtf_at, render};
 use sweepmtf::target::SweepLaw;
 
-/// The f/4 APS-C system the shipped samples use (diffraction × square pixel).
-fn system() -> sweepmtf::model::System {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("targets/systems/aps_c_f4.toml");
-    sweepmtf::model::System::from_file(&p).unwrap()
-}
+use crate::system_support::aps_c_f4 as system;
 
 /// The frequency (cy/px) where the truth's rows fall through 0.5.
 fn true_mtf50(rows: &[sweepmtf::simulate::truth::TruthRow]) -> f64 {

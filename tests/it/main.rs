@@ -8,6 +8,7 @@ mod locate_support;
 mod model_ref;
 mod patch_shot;
 mod raw_support;
+mod system_support;
 
 mod batch_cli;
 mod batch_measure;

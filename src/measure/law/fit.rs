@@ -225,7 +225,7 @@ fn lsq(pts: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<([f64
     if !(wsum > 0.0) {
         return None;
     }
-    let c = solve(&mut a, &mut r, n)?;
+    let c = solve(&a, &r, n)?;
     if !c.iter().all(|x| x.is_finite()) {
         return None;
     }
@@ -240,38 +240,32 @@ fn lsq(pts: &[(f64, f64, f64)], basis: impl Fn(f64) -> [f64; 3]) -> Option<([f64
     Some((c, (rss / wsum.max(1e-300)).sqrt()))
 }
 
-/// Solves a small symmetric system in place (Gaussian elimination with pivoting); `n` ≤ 3.
-fn solve(a: &mut [[f64; 3]; 3], r: &mut [f64; 3], n: usize) -> Option<[f64; 3]> {
-    // Scale columns for conditioning.
-    let scale: Vec<f64> = (0..n).map(|i| a[i][i].abs().sqrt().max(1e-300)).collect();
-    for i in 0..n {
-        r[i] /= scale[i];
-        for j in 0..n {
-            a[i][j] /= scale[i] * scale[j];
+/// Solves the first `n` (2 or 3) rows and columns of a small symmetric
+/// system, scaled to unit diagonal for conditioning, by [`crate::linalg::solve`];
+/// the unused third coefficient is 0.
+fn solve(a: &[[f64; 3]; 3], r: &[f64; 3], n: usize) -> Option<[f64; 3]> {
+    let scale: [f64; 3] = std::array::from_fn(|i| {
+        if i < n {
+            a[i][i].abs().sqrt().max(1e-300)
+        } else {
+            1.0
         }
-    }
-    for col in 0..n {
-        let piv = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-13 {
-            return None;
-        }
-        a.swap(col, piv);
-        r.swap(col, piv);
-        for row in 0..n {
-            if row != col {
-                let f = a[row][col] / a[col][col];
-                for j in 0..n {
-                    a[row][j] -= f * a[col][j];
-                }
-                r[row] -= f * r[col];
-            }
-        }
-    }
-    let mut c = [0.0; 3];
-    for i in 0..n {
-        c[i] = r[i] / a[i][i] / scale[i];
-    }
-    Some(c)
+    });
+    let c = if n == 2 {
+        let [c0, c1] = crate::linalg::solve::<2>(
+            std::array::from_fn(|i| std::array::from_fn(|j| a[i][j] / (scale[i] * scale[j]))),
+            std::array::from_fn(|i| r[i] / scale[i]),
+            1e-13,
+        )?;
+        [c0, c1, 0.0]
+    } else {
+        crate::linalg::solve::<3>(
+            std::array::from_fn(|i| std::array::from_fn(|j| a[i][j] / (scale[i] * scale[j]))),
+            std::array::from_fn(|i| r[i] / scale[i]),
+            1e-13,
+        )?
+    };
+    Some(std::array::from_fn(|i| c[i] / scale[i]))
 }
 
 #[cfg(test)]
