@@ -45,6 +45,7 @@ def assert_summary_matches(py_summary, cli_summary, tol=1e-12):
         for k in ("phase_c0_cycles", "freq_start_cy_per_unit", "c2", "foreshortening_per_unit"):
             assert close(p["sweep_law"][k], c["sweep_law"][k], tol), k
         assert p["points"] == c["points"]
+        assert p["print_ends_inside_px"] == c["print_ends_inside_px"]
     for k, v in enumerate(cli_summary["roi_px"]):
         assert np.allclose(py_summary["roi_px"][k], v, rtol=0, atol=1e-12)
 

@@ -47,6 +47,7 @@ mod preview;
 mod region;
 mod result;
 mod strip;
+mod sweep_end;
 mod tone;
 
 pub use curve::{Figures, MtfPoint};
@@ -489,6 +490,9 @@ fn measure_planes_lens(
             let (c, note) = r?;
             notes.extend(note);
             if let Some(line) = frequency::foreshortening_note(&c, opts.margin) {
+                notes.push(format!("{name}/{}: {line}", c.sweep_id));
+            }
+            if let Some(line) = sweep_end::note(&c.print_ends_inside_px) {
                 notes.push(format!("{name}/{}: {line}", c.sweep_id));
             }
             if c.clipped_fraction > 0.0 {

@@ -228,6 +228,7 @@ mod tests {
             alias_line_px: None,
             measured_lines_px: [[[0.0; 2]; 2]; 2],
             paper_bands_px: Vec::new(),
+            print_ends_inside_px: [None; 2],
             tone_fix: None,
         }
     }

@@ -117,6 +117,10 @@ pub struct Curve {
     pub alias_line_px: Option<[Point; 2]>,
     /// Image segment across the strip at the lowest and highest measured points.
     pub measured_lines_px: [[Point; 2]; 2],
+    /// How far inside the region's low- and high-frequency ends the printed
+    /// sweep was found to stop (image px; its bins beyond were left out),
+    /// None where it runs to the end ([`super::sweep_end`]).
+    pub print_ends_inside_px: [Option<f64>; 2],
     /// The camera tone curve found in the strip's shape, if it was looked for
     /// ([`super::sine_tone`]); in the summary JSON as `tone_correction`.
     #[serde(skip)]

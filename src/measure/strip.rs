@@ -12,7 +12,9 @@ use super::frequency::{
 };
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
-use super::{curve, law_guess, normalise, sine_tone, surround_leak, tone_black, tone_unseen};
+use super::{
+    curve, law_guess, normalise, sine_tone, surround_leak, sweep_end, tone_black, tone_unseen,
+};
 use crate::geometry::Point;
 use crate::photo::PlaneRef;
 use crate::photo::linearise::Tone;
@@ -171,6 +173,10 @@ pub(super) fn measure_strip(
             "{channel}/{id}: the frequency does not rise along the strip (corners 1 and 4 must be on the low-frequency edge)"
         )));
     }
+    // Ends clicked beyond the printed sweep: the bins beyond it left out.
+    let ends = sweep_end::find(&prof, &law, &s_per_px);
+    let mut parity = parity;
+    sweep_end::cut(&mut prof, &mut parity, &ends, bin_opts.end_px, &s_per_px);
     // A camera's own tone curve, found from the low end's shape and taken out.
     let mut paper_bands_px = Vec::new();
     let mut tone_fix = coding
@@ -417,6 +423,7 @@ pub(super) fn measure_strip(
         paper_bands_px,
         alias_line_px: alias_line,
         measured_lines_px: [across(s_first), across(s_last)],
+        print_ends_inside_px: ends.map(|e| e.map(|e| e.inside_px)),
         tone_fix,
     })
 }

@@ -69,6 +69,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                 "clipped_fraction": c.clipped_fraction,
                 "points": c.points.len(),
                 "points_aliased": c.points.iter().filter(|p| p.aliased).count(),
+                "print_ends_inside_px": c.print_ends_inside_px,
                 "tone_correction": c.tone_fix.as_ref().map(|f| json!({
                     "used": f.used,
                     "base": f.base.name(),

@@ -70,4 +70,5 @@ mod simulate_nuisances;
 mod simulate_output;
 mod simulate_samples;
 mod simulate_truth;
+mod sweep_end_clicked;
 mod tone_declared;
