@@ -39,6 +39,7 @@ pub mod synth_code_sharpen;
 pub mod tone_black;
 pub mod tone_unseen;
 
+mod block_ripple;
 mod frame;
 mod frequency;
 mod normalise;
@@ -526,8 +527,8 @@ fn measure_planes_lens(
                 }
             }
             if coding.block_ripple {
-                let drift = strip::bar_drift_px(&c);
-                if drift < strip::SQUARE_DRIFT_PX {
+                let drift = block_ripple::bar_drift_px(&c);
+                if drift < block_ripple::SQUARE_DRIFT_PX {
                     square.push((format!("{name}/{}", c.sweep_id), drift));
                 }
             }
