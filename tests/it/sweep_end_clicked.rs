@@ -47,7 +47,14 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
         let len = (c[1][0] - c[0][0]).hypot(c[1][1] - c[0][1]);
         let along = [(c[1][0] - c[0][0]) / len, (c[1][1] - c[0][1]) / len];
         // (high end beyond, low end beyond), px along the strip
-        for (hi, lo) in [(0.0, 0.0), (2.5, 0.0), (4.0, 3.0)] {
+        for (hi, lo) in [
+            (0.0, 0.0),
+            (2.5, 0.0),
+            (4.0, 3.0),
+            (9.0, 0.0),
+            (14.0, 0.0),
+            (22.0, 0.0),
+        ] {
             let mut given = [c[0], c[1], c[2], c[3]];
             for k in 0..2 {
                 given[1][k] += hi * along[k];
