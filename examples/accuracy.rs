@@ -9,9 +9,14 @@
 //! nuisance shots of issue 15 (uneven light, keystone, sharpening, RGB JPEG
 //! 4:2:0; `synth::nuisance_cases(0)`) with the CLI's defaults (refinement on),
 //! adding the MTF50 error and the chart modulation found (printed 0.800).
+//! Then the distortion rows (`-- --distortion-only` alone) and the same
+//! nuisance shots on paper with their high end clicked beyond the print
+//! (`-- --ends-only` alone).
 
 #[path = "accuracy/distortion.rs"]
 mod distortion;
+#[path = "accuracy/ends.rs"]
+mod ends;
 
 use std::time::Instant;
 use sweepmtf::measure::synth::{SynthShot, nuisance_cases, standard_cases};
@@ -61,6 +66,10 @@ fn main() {
     let quick = args.iter().any(|a| a == "--quick");
     if args.iter().any(|a| a == "--distortion-only") {
         distortion::table();
+        return;
+    }
+    if args.iter().any(|a| a == "--ends-only") {
+        ends::table();
         return;
     }
     let cases = standard_cases();
@@ -227,4 +236,5 @@ fn main() {
         }
     }
     distortion::table();
+    ends::table();
 }

@@ -76,6 +76,10 @@ pub struct MeasureFlags {
     /// Do not estimate lens distortion: measure as without it (like --distortion none).
     #[arg(long, conflicts_with = "distortion")]
     pub no_estimate_distortion: bool,
+    /// Keep every bin up to the region's ends: do not look for where the
+    /// printed sweep stops inside them (ends clicked beyond the print).
+    #[arg(long)]
+    pub keep_ends: bool,
     /// Estimator window in cycles (advanced).
     #[arg(long, default_value_t = 4.0, value_name = "CYCLES")]
     pub window: f64,
@@ -115,6 +119,7 @@ impl MeasureFlags {
             green_balance: !self.no_green_balance,
             distortion: self.distortion,
             estimate_distortion: !self.no_estimate_distortion,
+            find_print_ends: !self.keep_ends,
         })
     }
 }

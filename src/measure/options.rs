@@ -69,6 +69,10 @@ pub struct MeasureOptions {
     /// ([`lens_fit`](super::lens_fit)) and use it only when the evidence is clear (default on;
     /// off measures as without distortion).
     pub estimate_distortion: bool,
+    /// Look for where the printed sweep stops inside the region and leave
+    /// the bins beyond out ([`super::sweep_end`]; default on; off keeps every
+    /// bin up to the region's ends, as before session 35).
+    pub find_print_ends: bool,
 }
 
 /// Quality gate: least strip width inside the margins (px) for a curve.
@@ -101,6 +105,7 @@ impl Default for MeasureOptions {
             green_balance: true,
             distortion: None,
             estimate_distortion: true,
+            find_print_ends: true,
         }
     }
 }

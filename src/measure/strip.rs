@@ -167,7 +167,11 @@ pub(super) fn measure_strip(
         )));
     }
     // Ends clicked beyond the printed sweep: the bins beyond it left out.
-    let ends = sweep_end::find(&prof, &law, &s_per_px);
+    let ends = if opts.find_print_ends {
+        sweep_end::find(&prof, &law, &s_per_px)
+    } else {
+        [None, None]
+    };
     let mut parity = parity;
     sweep_end::cut(&mut prof, &mut parity, &ends, bin_opts.end_px, &s_per_px);
     // A camera's own tone curve, found from the low end's shape and taken out.
