@@ -104,6 +104,17 @@ fn writes_csv_json_and_both_pictures() {
     let v: serde_json::Value = serde_json::from_slice(&a.get_output().stdout).unwrap();
     assert_eq!(v["method"], "fit");
     assert!(out.join("sweep.mtf.svg").exists());
+    // The printed ends: none inside exact corners; --keep-ends looks for none.
+    assert_eq!(
+        v["curves"][0]["print_ends_inside_px"],
+        serde_json::json!([null, null])
+    );
+    let a = measure(&photo, &out, &["--roi", &roi, "--json", "--keep-ends"]).success();
+    let k: serde_json::Value = serde_json::from_slice(&a.get_output().stdout).unwrap();
+    assert_eq!(
+        k["curves"][0]["print_ends_inside_px"],
+        v["curves"][0]["print_ends_inside_px"]
+    );
 }
 
 /// Runs a failing measurement and checks: exit code, one line naming `needle`, no output files.

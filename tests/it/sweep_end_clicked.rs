@@ -87,6 +87,23 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
                 cv.print_ends_inside_px
             );
             let what = format!("{law:?}, {hi} / {lo} px beyond");
+            if hi == 4.0 {
+                // `--keep-ends`: every bin kept, the paper read as modulation.
+                let keep = MeasureOptions {
+                    find_print_ends: false,
+                    ..opts.clone()
+                };
+                let k = measure_decoded(&dec, "ends_clicked", None, &keep).unwrap();
+                let kc = &k.curves[0];
+                assert_eq!(kc.print_ends_inside_px, [None, None], "{what}");
+                let kept_worst = kc
+                    .points
+                    .iter()
+                    .filter(|p| !p.aliased && (0.01..=0.45).contains(&p.freq_cy_px))
+                    .map(|p| (p.mtf - mtf_at(&truth.rows, p.freq_cy_px)).abs())
+                    .fold(0.0, f64::max);
+                assert!(kept_worst > 0.1, "{what}: kept, worst {kept_worst}");
+            }
             assert!(rms <= 0.002, "{what}: RMS {rms}");
             assert!(worst <= 0.015, "{what}: worst {worst}");
             assert!(cm.abs() <= 0.002, "{what}: chart modulation {cm}");
