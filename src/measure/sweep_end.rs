@@ -320,13 +320,26 @@ mod tests {
     /// modulation 0.3, printed up to `end` and `beyond` (its level) after,
     /// blurred by a Gaussian of σ 0.8 px, with noise.
     fn sweep(end: f64, beyond: f64, noise: f64, seed: u64) -> (Profile, PhaseLaw) {
+        sweep_from(0.05, f64::NEG_INFINITY, end, beyond, noise, seed)
+    }
+
+    /// [`sweep`] starting at `f0` cy/unit, printed from `start` to `end`.
+    fn sweep_from(
+        f0: f64,
+        start: f64,
+        end: f64,
+        beyond: f64,
+        noise: f64,
+        seed: u64,
+    ) -> (Profile, PhaseLaw) {
         let sig = 0.8;
-        let (mut prof, law) = linear_profile(0.05, 0.3 / 600.0, 600.0, |_, _| 0.0);
+        let (mut prof, law) = linear_profile(f0, 0.3 / 600.0, 600.0, |_, _| 0.0);
         let mut st = seed;
+        let r2 = sig * std::f64::consts::SQRT_2;
         for k in 0..prof.s.len() {
             let s = prof.s[k];
-            // The blurred step: the sweep's share at s.
-            let share = 0.5 * erfc_approx((s - end) / (sig * std::f64::consts::SQRT_2));
+            // The blurred steps: the sweep's share at s.
+            let share = 0.5 * erfc_approx((s - end) / r2) - 0.5 * erfc_approx((s - start) / r2);
             let f = law.freq(s);
             let att = (-2.0 * (std::f64::consts::PI * f * sig).powi(2)).exp();
             let sweep = 0.5 * (1.0 + 0.3 * att * (TAU * law.phase(s)).cos());
@@ -371,6 +384,20 @@ mod tests {
                 assert!(got[0].is_none(), "{what}: a low end found {got:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_low_end_is_searched_only_where_its_cycle_is_short() {
+        let one = |_: f64| 1.0;
+        // 0.15 cy/px at the start (a 6.7 px cycle): paper before s = 5 is found.
+        let (prof, law) = sweep_from(0.15, 5.0, 1e9, 1.0, 0.004, 5);
+        let got = find(&prof, &law, &one);
+        let lo = got[0].expect("a low end 5 px inside");
+        assert!((-0.5..1.6).contains(&(lo.s - 5.0)), "{lo:?}");
+        assert!(got[1].is_none(), "{got:?}");
+        // 0.05 cy/px (20 px a cycle): left to the low end's margins.
+        let (prof, law) = sweep_from(0.05, 5.0, 1e9, 1.0, 0.004, 5);
+        assert_eq!(find(&prof, &law, &one), [None, None]);
     }
 
     #[test]
