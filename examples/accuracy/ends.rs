@@ -1,7 +1,8 @@
 //! Ends-clicked rows of the accuracy example (session 35): the real
 //! simulator's strip on white paper (a log and a linear sweep, 0.01–0.45
 //! cy/px, ≈ 830 × 80 px), its high-frequency end given 0, 4, 12 and 22 px
-//! beyond the print (corners 2 and 3 moved along the strip), measured with
+//! beyond the print (corners 2 and 3 moved along the strip), or its low end
+//! 3 px (corners 1 and 4), measured with
 //! the CLI's defaults, with the printed ends looked for (the default) and
 //! without (`--keep-ends`, as before session 35). Truth: the simulator's
 //! analytic MTF and printed contrast.
@@ -17,7 +18,7 @@ use sweepmtf::target::SweepLaw;
 pub fn table() {
     println!();
     println!(
-        "| sweep | high end beyond (px) | ends | RMS error | worst point | MTF50 error % | chart modulation error % | end found inside (px) | time ms |"
+        "| sweep | high / low end beyond (px) | ends | RMS error | worst point | MTF50 error % | chart modulation error % | ends found inside, low / high (px) | time ms |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     let cam = Camera {
@@ -50,11 +51,13 @@ pub fn table() {
         let c: Vec<[f64; 2]> = (0..4).map(|i| [r[2 * i], r[2 * i + 1]]).collect();
         let len = (c[1][0] - c[0][0]).hypot(c[1][1] - c[0][1]);
         let along = [(c[1][0] - c[0][0]) / len, (c[1][1] - c[0][1]) / len];
-        for beyond in [0.0, 4.0, 12.0, 22.0] {
+        for (beyond, low) in [(0.0, 0.0), (4.0, 0.0), (12.0, 0.0), (22.0, 0.0), (0.0, 3.0)] {
             let mut quad = [c[0], c[1], c[2], c[3]];
             for k in 0..2 {
                 quad[1][k] += beyond * along[k];
                 quad[2][k] += beyond * along[k];
+                quad[0][k] -= low * along[k];
+                quad[3][k] -= low * along[k];
             }
             for find in [false, true] {
                 let opts = MeasureOptions {
@@ -74,7 +77,9 @@ pub fn table() {
                 let m = match res {
                     Ok(m) => m,
                     Err(e) => {
-                        println!("| {law:?} | {beyond} | {label} | failed: {e} | | | | | |");
+                        println!(
+                            "| {law:?} | {beyond} / {low} | {label} | failed: {e} | | | | | |"
+                        );
                         continue;
                     }
                 };
@@ -95,11 +100,12 @@ pub fn table() {
                     .mtf50_cy_px
                     .map(|m| format!("{:+.2}", 100.0 * (m / f50 - 1.0)))
                     .unwrap_or_else(|| "none".into());
-                let found = cv.print_ends_inside_px[1]
-                    .map(|d| format!("{d:.1}"))
-                    .unwrap_or_else(|| "none".into());
+                let found = cv
+                    .print_ends_inside_px
+                    .map(|e| e.map_or_else(|| "none".into(), |d| format!("{d:.1}")))
+                    .join(" / ");
                 println!(
-                    "| {law:?} | {beyond} | {label} | {:.4} | {worst:.4} | {e50} | {:+.2} | {found} | {ms:.1} |",
+                    "| {law:?} | {beyond} / {low} | {label} | {:.4} | {worst:.4} | {e50} | {:+.2} | {found} | {ms:.1} |",
                     (se / n.max(1) as f64).sqrt(),
                     100.0 * (cv.chart_modulation / contrast - 1.0),
                 );

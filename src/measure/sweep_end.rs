@@ -9,7 +9,9 @@
 //! The end is found as a change point: near each end of the profile, the
 //! bins are fitted once by the sweep's model (mean and amplitude each
 //! linear in s, the phase from the law) and once split at a candidate end,
-//! the sweep's model inside and a straight line (no oscillation) beyond.
+//! the sweep's model inside and a straight line (no oscillation) beyond
+//! (one level where the sweep's cycle is long, as at a log sweep's low end:
+//! a line there stands in for part of a cycle).
 //! Where the best split explains the bins better than the sweep alone by
 //! far more than noise allows, the bins beyond it are left out. Whatever the
 //! surround is (paper brighter than the sweep's mean, a dark frame, or a
@@ -28,7 +30,9 @@ use std::f64::consts::TAU;
 /// round (image px): a hand's click, not a misplaced region.
 const SEARCH_PX: f64 = 16.0;
 
-/// Longest cycle (image px) at an end for it to be searched: see [`find_end`].
+/// Longest cycle (image px) at an end for the surround beyond a candidate
+/// end to be fitted by a straight line; beyond it, by one level (see
+/// [`find_end`]).
 const LONGEST_CYCLE_PX: f64 = 10.0;
 
 /// Searches in turn at most.
@@ -139,12 +143,20 @@ pub(super) fn cut(
     }
 }
 
+/// An end found closer than this to the region's end (image px) is named in
+/// no note: exact corners find the print's own blurred edge there (the
+/// simulator's strips: 1.1 px at the low end).
+const NOTED_PX: f64 = 1.5;
+
 /// The note naming the printed ends found inside the region, if any.
 pub(super) fn note(inside_px: &[Option<f64>; 2]) -> Option<String> {
     let said: Vec<String> = inside_px
         .iter()
         .zip(["low", "high"])
-        .filter_map(|(d, which)| d.map(|d| format!("{d:.1} px inside its {which}-frequency end")))
+        .filter_map(|(d, which)| {
+            d.filter(|&d| d >= NOTED_PX)
+                .map(|d| format!("{d:.1} px inside its {which}-frequency end"))
+        })
         .collect();
     (!said.is_empty()).then(|| {
         format!(
@@ -213,13 +225,11 @@ fn find_end(
     if !(px > 0.0 && px.is_finite() && f > 0.0 && f.is_finite()) {
         return None;
     }
-    // Where a cycle is longer than the search, a straight line beyond a
-    // candidate end stands in for part of a cycle (a log sweep's low end,
-    // 58 px a cycle, read an end 6.4 px inside exact corners): such an end
-    // is left to the margins the low end's windows keep.
-    if f * px * LONGEST_CYCLE_PX < 1.0 {
-        return None;
-    }
+    // Where a cycle is longer than [`LONGEST_CYCLE_PX`], a straight line
+    // beyond a candidate end stands in for part of a cycle (a log sweep's
+    // low end, 58 px a cycle, read an end 6.4 px inside exact corners): the
+    // surround beyond is then one level, a constant.
+    let level_beyond = f * px * LONGEST_CYCLE_PX < 1.0;
     let span = last - first;
     let search = (SEARCH_PX * px).min(0.2 * span);
     let inside = (INSIDE_CYCLES / law.freq(if high { edge - search } else { edge + search }))
@@ -284,7 +294,12 @@ fn find_end(
             continue;
         }
         let beyond = &suffix[i + 1];
-        let (Some(a), Some(b)) = (prefix.rss(), line_rss(beyond)) else {
+        let b = if level_beyond {
+            level_rss(beyond)
+        } else {
+            line_rss(beyond)
+        };
+        let (Some(a), Some(b)) = (prefix.rss(), b) else {
             continue;
         };
         if best.is_none_or(|(r, _, _)| a + b < r) {
@@ -297,6 +312,11 @@ fn find_end(
     let var = split / dof;
     let gain = null - split;
     (var > 0.0 && gain > MIN_GAIN * var).then_some(if high { edge - depth } else { edge + depth })
+}
+
+/// The constant's weighted squared residual.
+fn level_rss(n: &Normal<2>) -> Option<f64> {
+    (n.w > 0.0).then(|| (n.yy - n.aty[0] * n.aty[0] / n.w).max(0.0))
 }
 
 /// The straight line's weighted squared residual (a constant where the rows
@@ -387,17 +407,22 @@ mod tests {
     }
 
     #[test]
-    fn a_low_end_is_searched_only_where_its_cycle_is_short() {
+    fn a_low_end_is_found_whatever_its_cycle() {
         let one = |_: f64| 1.0;
-        // 0.15 cy/px at the start (a 6.7 px cycle): paper before s = 5 is found.
-        let (prof, law) = sweep_from(0.15, 5.0, 1e9, 1.0, 0.004, 5);
-        let got = find(&prof, &law, &one);
-        let lo = got[0].expect("a low end 5 px inside");
-        assert!((-0.5..1.6).contains(&(lo.s - 5.0)), "{lo:?}");
-        assert!(got[1].is_none(), "{got:?}");
-        // 0.05 cy/px (20 px a cycle): left to the low end's margins.
-        let (prof, law) = sweep_from(0.05, 5.0, 1e9, 1.0, 0.004, 5);
-        assert_eq!(find(&prof, &law, &one), [None, None]);
+        // 0.15 cy/px at the start (a 6.7 px cycle: a line beyond), 0.05 and
+        // 0.009 (20 and 111 px: one level beyond); paper or black before s = 5.
+        for f0 in [0.15, 0.05, 0.009] {
+            for beyond in [1.0, 0.05] {
+                let (prof, law) = sweep_from(f0, 5.0, 1e9, beyond, 0.004, 5);
+                let got = find(&prof, &law, &one);
+                let lo = got[0].unwrap_or_else(|| panic!("{f0} {beyond}: no low end"));
+                assert!((-0.5..1.6).contains(&(lo.s - 5.0)), "{f0} {beyond}: {lo:?}");
+                assert!(got[1].is_none(), "{got:?}");
+                // Printed from the first bin: none.
+                let (prof, law) = sweep_from(f0, f64::NEG_INFINITY, 1e9, beyond, 0.004, 5);
+                assert_eq!(find(&prof, &law, &one), [None, None], "{f0} {beyond}");
+            }
+        }
     }
 
     #[test]
