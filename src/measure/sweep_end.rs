@@ -78,7 +78,7 @@ pub(super) fn find(
     if n < 20 || prof.y.len() != n || prof.count.len() != n {
         return [None, None];
     }
-    [false, true].map(|high| {
+    let ends = [false, true].map(|high| {
         let edge = if high { prof.s[n - 1] } else { prof.s[0] };
         let mut bins = 0..n;
         let mut found = None;
@@ -101,7 +101,15 @@ pub(super) fn find(
             };
         }
         found
-    })
+    });
+    // Ends that would leave less than half the strip are no click's few
+    // pixels but a sweep the law does not follow: nothing is cut.
+    let (first, last) = (prof.s[0], prof.s[n - 1]);
+    let kept = ends[1].map_or(last, |e| e.s) - ends[0].map_or(first, |e| e.s);
+    if kept < 0.5 * (last - first) {
+        return [None, None];
+    }
+    ends
 }
 
 /// Leaves out the bins beyond each printed end found, and `margin_px` more
