@@ -133,22 +133,23 @@ pub(super) fn cut(
     if lo >= hi {
         return;
     }
-    let keep = |v: &mut Vec<f64>| {
-        v.truncate(hi);
-        v.drain(..lo);
-    };
-    keep(&mut prof.s);
-    keep(&mut prof.y);
-    keep(&mut prof.count);
-    keep(&mut prof.var_s);
+    keep(&mut prof.s, lo, hi);
+    keep(&mut prof.y, lo, hi);
+    keep(&mut prof.count, lo, hi);
+    keep(&mut prof.var_s, lo, hi);
+    // Per-bin flags and parities, where the profile has them.
     if prof.clipped.len() == n {
-        prof.clipped.truncate(hi);
-        prof.clipped.drain(..lo);
+        keep(&mut prof.clipped, lo, hi);
     }
     if parity.len() == n {
-        parity.truncate(hi);
-        parity.drain(..lo);
+        keep(parity, lo, hi);
     }
+}
+
+/// Keeps the entries `lo..hi` of `v`.
+fn keep<T>(v: &mut Vec<T>, lo: usize, hi: usize) {
+    v.truncate(hi);
+    v.drain(..lo);
 }
 
 /// An end found closer than this to the region's end (image px) is named in
