@@ -49,6 +49,7 @@
 use super::PhaseLaw;
 use super::profile::Profile;
 use crate::photo::linearise::Tone;
+use rayon::prelude::*;
 
 mod system;
 pub(super) use system::window_row;
@@ -289,7 +290,7 @@ pub const MAX_PASSES: usize = 3;
 pub fn fit(
     prof: &Profile,
     law: &PhaseLaw,
-    s_per_px: &dyn Fn(f64) -> f64,
+    s_per_px: &(dyn Fn(f64) -> f64 + Sync),
     base: &Tone,
 ) -> Option<ToneFix> {
     let wins = windows(prof, law, s_per_px, base);
@@ -317,7 +318,7 @@ pub fn fit(
     {
         // The rows as the passes so far leave them (read where the original codes were clean).
         let work: Vec<Vec<Row>> = wins
-            .iter()
+            .par_iter()
             .map(|w| {
                 w.iter()
                     .map(|r| r.with_value(base, fix.linear(r.v)))
