@@ -1,7 +1,7 @@
 //! Ends-clicked rows of the accuracy example (session 35): the real
 //! simulator's strip on white paper (a log and a linear sweep, 0.01–0.45
-//! cy/px, ≈ 830 × 80 px), its high-frequency end given 0, 4, 12 and 22 px
-//! beyond the print (corners 2 and 3 moved along the strip), or its low end
+//! cy/px, ≈ 830 × 80 px), its high-frequency end given 0, 4, 12, 22, 40
+//! and 75 px beyond the print (corners 2 and 3 moved along the strip), or its low end
 //! 3 px (corners 1 and 4), measured with
 //! the CLI's defaults, with the printed ends looked for (the default) and
 //! without (`--keep-ends`, as before session 35). Truth: the simulator's
@@ -51,7 +51,15 @@ pub fn table() {
         let c: Vec<[f64; 2]> = (0..4).map(|i| [r[2 * i], r[2 * i + 1]]).collect();
         let len = (c[1][0] - c[0][0]).hypot(c[1][1] - c[0][1]);
         let along = [(c[1][0] - c[0][0]) / len, (c[1][1] - c[0][1]) / len];
-        for (beyond, low) in [(0.0, 0.0), (4.0, 0.0), (12.0, 0.0), (22.0, 0.0), (0.0, 3.0)] {
+        for (beyond, low) in [
+            (0.0, 0.0),
+            (4.0, 0.0),
+            (12.0, 0.0),
+            (22.0, 0.0),
+            (40.0, 0.0),
+            (75.0, 0.0),
+            (0.0, 3.0),
+        ] {
             let mut quad = [c[0], c[1], c[2], c[3]];
             for k in 0..2 {
                 quad[1][k] += beyond * along[k];

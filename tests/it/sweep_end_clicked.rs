@@ -54,6 +54,8 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
             (9.0, 0.0),
             (14.0, 0.0),
             (22.0, 0.0),
+            (40.0, 0.0),
+            (75.0, 0.0),
         ] {
             let mut given = [c[0], c[1], c[2], c[3]];
             for k in 0..2 {

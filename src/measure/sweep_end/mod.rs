@@ -19,8 +19,11 @@
 //! an end inside the print (the sweep oscillates to the last bin) keeps
 //! every bin. Each search covers the last [`SEARCH_PX`] of the bins, and an
 //! end found there is searched again from just inside it, so an end clicked
-//! up to about 24 px beyond the print is found (tested to 22 px); farther,
-//! the first search sees no sweep at all and keeps every bin.
+//! up to about 24 px beyond the print is found (tested to 22 px). Farther,
+//! the first search sees no sweep at all: at the high end, a surround whose
+//! level steps to the sweep's mean (paper or a dark frame) is then walked
+//! over to where it meets the print ([`surround_end`], up to a quarter of
+//! the strip), and the search starts there.
 
 use super::law::PhaseLaw;
 use super::profile::Profile;
@@ -41,6 +44,23 @@ const ROUNDS: usize = 4;
 /// How far inside an end found the next search starts (image px): clear of
 /// the print's blurred edge.
 const RESTART_PX: f64 = 2.0;
+
+/// The stretch a surround beyond the high end is walked in (image px; see
+/// [`surround_end`]).
+const SURROUND_STEP_PX: f64 = 8.0;
+
+/// Farthest a surround is followed inwards, as a fraction of the strip.
+const MAX_SURROUND_FRACTION: f64 = 0.25;
+
+/// How far (relative) a surround's level may wander from one stretch to
+/// the next: light changes slowly along a strip.
+const SURROUND_TOLERANCE: f64 = 0.1;
+
+/// The least step in level (relative to the larger) from the surround to
+/// the sweep's mean for a surround to be stepped over: paper (about twice
+/// the mean of a sweep printed about mid-grey) or a dark frame; a grey equal
+/// to the sweep's mean is not.
+const MIN_STEP: f64 = 0.2;
 
 /// Fewest image px beyond a candidate end for the split to be tried.
 const MIN_BEYOND_PX: f64 = 1.0;
@@ -86,7 +106,18 @@ pub(super) fn find(
         // each search starting clear of the last one's blurred edge.
         for _ in 0..ROUNDS {
             let Some(s) = find_end(prof, law, s_per_px, high, bins.clone()) else {
-                break;
+                // Nothing at the region's high end: a surround reaching farther
+                // than one search is stepped over, once, to where it meets the sweep.
+                match (high, found) {
+                    (true, None) if bins.end == n => match surround_end(prof, law, s_per_px) {
+                        Some(z) if z < bins.end => {
+                            bins = bins.start..z;
+                            continue;
+                        }
+                        _ => break,
+                    },
+                    _ => break,
+                }
             };
             let px = s_per_px(s);
             found = Some(PrintedEnd {
@@ -206,6 +237,11 @@ impl<const P: usize> Normal<P> {
         self.w += w;
     }
 
+    /// The fitted coefficients; None when the system is singular.
+    fn solve(&self) -> Option<[f64; P]> {
+        crate::linalg::solve(self.ata, self.aty, 1e-12 * self.w.max(1e-300))
+    }
+
     /// The weighted squared residual of the fit; None when it is singular.
     fn rss(&self) -> Option<f64> {
         let beta = crate::linalg::solve(self.ata, self.aty, 1e-12 * self.w.max(1e-300))?;
@@ -323,6 +359,70 @@ fn find_end(
     (var > 0.0 && gain > MIN_GAIN * var).then_some(if high { edge - depth } else { edge + depth })
 }
 
+/// Where a surround beyond the high end, too long for one search to see the
+/// sweep, meets it: the bins are walked inwards in stretches of
+/// [`SURROUND_STEP_PX`], each fitted by a level and the sweep's cosine and
+/// sine (so part of a cycle does not move the level), while the level stays
+/// the surround's; where it leaves it, the level one stretch farther in must
+/// differ from the surround's by [`MIN_STEP`] (a step, not the light's slow
+/// change, nor a sweep whose modulation has faded: its level stays its
+/// mean). Returns the end (exclusive bin index) for the next search: one
+/// stretch of surround beyond the stretch where the level changed. None
+/// where the cycle there is long (one stretch would not hold one), the
+/// surround is not followed to a step within [`MAX_SURROUND_FRACTION`] of
+/// the strip, or the bins cannot be fitted.
+fn surround_end(prof: &Profile, law: &PhaseLaw, s_per_px: &dyn Fn(f64) -> f64) -> Option<usize> {
+    let n = prof.s.len();
+    let (first, edge) = (*prof.s.first()?, *prof.s.last()?);
+    let px = s_per_px(edge);
+    let f = law.freq(edge);
+    if !(px > 0.0 && px.is_finite() && f > 0.0 && f * px * LONGEST_CYCLE_PX >= 1.0) {
+        return None;
+    }
+    let step = SURROUND_STEP_PX * px;
+    let reach = MAX_SURROUND_FRACTION * (edge - first);
+    // The level over the bins with s in (a, b]: the constant of a level,
+    // cosine and sine fit.
+    let level = |a: f64, b: f64| -> Option<f64> {
+        let lo = prof.s.partition_point(|&v| v <= a);
+        let hi = prof.s.partition_point(|&v| v <= b);
+        let mut nrm = Normal::<3>::new();
+        let mut rows = 0;
+        for k in lo..hi {
+            if prof.is_clipped(k) || !(prof.count[k] > 0.0) || !prof.y[k].is_finite() {
+                continue;
+            }
+            let (sn, cs) = (TAU * law.phase(prof.s[k])).sin_cos();
+            nrm.add(&[1.0, cs, sn], prof.y[k], prof.count[k]);
+            rows += 1;
+        }
+        if rows < 8 {
+            return None;
+        }
+        let beta = nrm.solve()?;
+        beta[0].is_finite().then_some(beta[0])
+    };
+    let mut prev = level(edge - step, edge)?;
+    let mut k = 1.0;
+    loop {
+        let b = edge - k * step;
+        if edge - (b - step) > reach {
+            return None;
+        }
+        let here = level(b - step, b)?;
+        if (here - prev).abs() <= SURROUND_TOLERANCE * prev.abs().max(here.abs()) {
+            prev = here;
+            k += 1.0;
+            continue;
+        }
+        // The level changed in (b − step, b]: a step to the sweep's mean?
+        let inside = level(b - 2.0 * step, b - step)?;
+        let big = prev.abs().max(inside.abs());
+        return ((inside - prev).abs() > MIN_STEP * big && big > 0.0)
+            .then(|| prof.s.partition_point(|&v| v <= b + step).min(n));
+    }
+}
+
 /// The constant's weighted squared residual.
 fn level_rss(n: &Normal<2>) -> Option<f64> {
     (n.w > 0.0).then(|| (n.yy - n.aty[0] * n.aty[0] / n.w).max(0.0))
@@ -341,122 +441,4 @@ fn line_rss(n: &Normal<2>) -> Option<f64> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::measure::estimate::tests_support::{lcg_normal, linear_profile};
-
-    /// A chirp from 0.05 to 0.35 cy/unit over 600 units (unit = px), mean 0.5,
-    /// modulation 0.3, printed up to `end` and `beyond` (its level) after,
-    /// blurred by a Gaussian of σ 0.8 px, with noise.
-    fn sweep(end: f64, beyond: f64, noise: f64, seed: u64) -> (Profile, PhaseLaw) {
-        sweep_from(0.05, f64::NEG_INFINITY, end, beyond, noise, seed)
-    }
-
-    /// [`sweep`] starting at `f0` cy/unit, printed from `start` to `end`.
-    fn sweep_from(
-        f0: f64,
-        start: f64,
-        end: f64,
-        beyond: f64,
-        noise: f64,
-        seed: u64,
-    ) -> (Profile, PhaseLaw) {
-        let sig = 0.8;
-        let (mut prof, law) = linear_profile(f0, 0.3 / 600.0, 600.0, |_, _| 0.0);
-        let mut st = seed;
-        let r2 = sig * std::f64::consts::SQRT_2;
-        for k in 0..prof.s.len() {
-            let s = prof.s[k];
-            // The blurred steps: the sweep's share at s.
-            let share = 0.5 * erfc_approx((s - end) / r2) - 0.5 * erfc_approx((s - start) / r2);
-            let f = law.freq(s);
-            let att = (-2.0 * (std::f64::consts::PI * f * sig).powi(2)).exp();
-            let sweep = 0.5 * (1.0 + 0.3 * att * (TAU * law.phase(s)).cos());
-            prof.y[k] = share * sweep + (1.0 - share) * beyond + noise * lcg_normal(&mut st);
-        }
-        (prof, law)
-    }
-
-    /// erfc to ~1e-7 (Numerical Recipes' Chebyshev form).
-    fn erfc_approx(x: f64) -> f64 {
-        let z = x.abs();
-        let t = 1.0 / (1.0 + 0.5 * z);
-        let r = t
-            * (-z * z - 1.26551223
-                + t * (1.00002368
-                    + t * (0.37409196
-                        + t * (0.09678418
-                            + t * (-0.18628806
-                                + t * (0.27886807
-                                    + t * (-1.13520398
-                                        + t * (1.48851587
-                                            + t * (-0.82215223 + t * 0.17087277)))))))))
-                .exp();
-        if x >= 0.0 { r } else { 2.0 - r }
-    }
-
-    #[test]
-    fn a_printed_end_inside_the_region_is_found_whatever_lies_beyond() {
-        let one = |_: f64| 1.0;
-        for (beyond, what) in [(1.0, "paper"), (0.05, "black"), (0.5, "grey")] {
-            for end in [592.0, 595.5, 598.0] {
-                let (prof, law) = sweep(end, beyond, 0.004, 3);
-                let got = find(&prof, &law, &one);
-                let hi = got[1].unwrap_or_else(|| panic!("{what} end {end}: none found"));
-                assert!(
-                    // The blurred step's ramp, when little of it lies
-                    // inside the region, reads the end up to 1.5 px early.
-                    (-1.6..0.5).contains(&(hi.s - end)),
-                    "{what}: end {end} found at {}",
-                    hi.s
-                );
-                assert!(got[0].is_none(), "{what}: a low end found {got:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn a_low_end_is_found_whatever_its_cycle() {
-        let one = |_: f64| 1.0;
-        // 0.15 cy/px at the start (a 6.7 px cycle: a line beyond), 0.05 and
-        // 0.009 (20 and 111 px: one level beyond); paper or black before s = 5.
-        for f0 in [0.15, 0.05, 0.009] {
-            for beyond in [1.0, 0.05] {
-                let (prof, law) = sweep_from(f0, 5.0, 1e9, beyond, 0.004, 5);
-                let got = find(&prof, &law, &one);
-                let lo = got[0].unwrap_or_else(|| panic!("{f0} {beyond}: no low end"));
-                assert!((-0.5..1.6).contains(&(lo.s - 5.0)), "{f0} {beyond}: {lo:?}");
-                assert!(got[1].is_none(), "{got:?}");
-                // Printed from the first bin: none.
-                let (prof, law) = sweep_from(f0, f64::NEG_INFINITY, 1e9, beyond, 0.004, 5);
-                assert_eq!(find(&prof, &law, &one), [None, None], "{f0} {beyond}");
-            }
-        }
-    }
-
-    #[test]
-    fn noise_alone_moves_no_end() {
-        let one = |_: f64| 1.0;
-        for seed in 1..40 {
-            for noise in [0.002, 0.02, 0.1] {
-                let (prof, law) = sweep(1e9, 1.0, noise, seed);
-                let got = find(&prof, &law, &one);
-                assert!(got == [None, None], "seed {seed} noise {noise}: {got:?}");
-            }
-        }
-    }
-
-    #[test]
-    fn broken_profiles_give_no_end() {
-        let one = |_: f64| 1.0;
-        let (mut prof, law) = sweep(595.0, 1.0, 0.0, 1);
-        let nan = |_: f64| f64::NAN;
-        assert_eq!(find(&prof, &law, &nan), [None, None]);
-        prof.y.iter_mut().for_each(|y| *y = 0.5);
-        assert_eq!(find(&prof, &law, &one), [None, None], "flat");
-        prof.y[100] = f64::NAN;
-        let _ = find(&prof, &law, &one);
-        prof.s.truncate(10);
-        assert_eq!(find(&prof, &law, &one), [None, None], "short");
-    }
-}
+mod tests;

@@ -1,0 +1,162 @@
+//! Tests of the printed ends' search, on chirps blurred by a Gaussian edge.
+
+use super::*;
+use crate::measure::estimate::tests_support::{lcg_normal, linear_profile};
+
+/// A chirp from 0.05 to 0.35 cy/unit over 600 units (unit = px), mean 0.5,
+/// modulation 0.3, printed up to `end` and `beyond` (its level) after,
+/// blurred by a Gaussian of σ 0.8 px, with noise.
+fn sweep(end: f64, beyond: f64, noise: f64, seed: u64) -> (Profile, PhaseLaw) {
+    sweep_from(0.05, f64::NEG_INFINITY, end, beyond, noise, seed)
+}
+
+/// [`sweep`] starting at `f0` cy/unit, printed from `start` to `end`.
+fn sweep_from(
+    f0: f64,
+    start: f64,
+    end: f64,
+    beyond: f64,
+    noise: f64,
+    seed: u64,
+) -> (Profile, PhaseLaw) {
+    let sig = 0.8;
+    let (mut prof, law) = linear_profile(f0, 0.3 / 600.0, 600.0, |_, _| 0.0);
+    let mut st = seed;
+    let r2 = sig * std::f64::consts::SQRT_2;
+    for k in 0..prof.s.len() {
+        let s = prof.s[k];
+        // The blurred steps: the sweep's share at s.
+        let share = 0.5 * erfc_approx((s - end) / r2) - 0.5 * erfc_approx((s - start) / r2);
+        let f = law.freq(s);
+        let att = (-2.0 * (std::f64::consts::PI * f * sig).powi(2)).exp();
+        let sweep = 0.5 * (1.0 + 0.3 * att * (TAU * law.phase(s)).cos());
+        prof.y[k] = share * sweep + (1.0 - share) * beyond + noise * lcg_normal(&mut st);
+    }
+    (prof, law)
+}
+
+/// erfc to ~1e-7 (Numerical Recipes' Chebyshev form).
+fn erfc_approx(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.26551223
+            + t * (1.00002368
+                + t * (0.37409196
+                    + t * (0.09678418
+                        + t * (-0.18628806
+                            + t * (0.27886807
+                                + t * (-1.13520398
+                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
+            .exp();
+    if x >= 0.0 { r } else { 2.0 - r }
+}
+
+#[test]
+fn a_printed_end_inside_the_region_is_found_whatever_lies_beyond() {
+    let one = |_: f64| 1.0;
+    for (beyond, what) in [(1.0, "paper"), (0.05, "black"), (0.5, "grey")] {
+        for end in [592.0, 595.5, 598.0] {
+            let (prof, law) = sweep(end, beyond, 0.004, 3);
+            let got = find(&prof, &law, &one);
+            let hi = got[1].unwrap_or_else(|| panic!("{what} end {end}: none found"));
+            assert!(
+                // The blurred step's ramp, when little of it lies
+                // inside the region, reads the end up to 1.5 px early.
+                (-1.6..0.5).contains(&(hi.s - end)),
+                "{what}: end {end} found at {}",
+                hi.s
+            );
+            assert!(got[0].is_none(), "{what}: a low end found {got:?}");
+        }
+    }
+}
+
+#[test]
+fn a_surround_longer_than_one_search_is_stepped_over_to_the_print() {
+    let one = |_: f64| 1.0;
+    for (beyond, what) in [(1.0, "paper"), (0.05, "black")] {
+        for inside in [30.0, 60.0, 100.0, 140.0] {
+            let end = 600.0 - inside;
+            let (prof, law) = sweep(end, beyond, 0.004, 7);
+            let got = find(&prof, &law, &one);
+            let hi = got[1].unwrap_or_else(|| panic!("{what} {inside} px: none found"));
+            assert!(
+                (-1.6..0.5).contains(&(hi.s - end)),
+                "{what} {inside} px: end {end} found at {}",
+                hi.s
+            );
+            assert!(got[0].is_none(), "{what}: a low end found {got:?}");
+        }
+    }
+    // Beyond a quarter of the strip: not followed (a misplaced region).
+    let (prof, law) = sweep(400.0, 1.0, 0.004, 7);
+    assert_eq!(find(&prof, &law, &one)[1], None);
+}
+
+#[test]
+fn no_step_in_level_is_no_surround() {
+    let one = |_: f64| 1.0;
+    // A grey equal to the sweep's mean 60 px beyond: the oscillation's
+    // stop alone, which one search reaching the print would see, is
+    // not followed that far (the documented limit).
+    let (prof, law) = sweep(540.0, 0.5, 0.004, 7);
+    assert_eq!(find(&prof, &law, &one)[1], None, "grey");
+    // A sweep whose modulation fades to nothing long before the end (a
+    // soft lens: σ 3 px) and light falling 3:1 along the strip: no end.
+    let (mut prof, law) = linear_profile(0.05, 0.3 / 600.0, 600.0, |_, _| 0.0);
+    let mut st = 11;
+    for k in 0..prof.s.len() {
+        let s = prof.s[k];
+        let att = (-2.0 * (std::f64::consts::PI * law.freq(s) * 3.0).powi(2)).exp();
+        let light = 3.0f64.powf(-s / 600.0);
+        prof.y[k] = light * 0.5 * (1.0 + 0.3 * att * (TAU * law.phase(s)).cos())
+            + 0.004 * lcg_normal(&mut st);
+    }
+    assert_eq!(find(&prof, &law, &one), [None, None], "faded, uneven light");
+}
+
+#[test]
+fn a_low_end_is_found_whatever_its_cycle() {
+    let one = |_: f64| 1.0;
+    // 0.15 cy/px at the start (a 6.7 px cycle: a line beyond), 0.05 and
+    // 0.009 (20 and 111 px: one level beyond); paper or black before s = 5.
+    for f0 in [0.15, 0.05, 0.009] {
+        for beyond in [1.0, 0.05] {
+            let (prof, law) = sweep_from(f0, 5.0, 1e9, beyond, 0.004, 5);
+            let got = find(&prof, &law, &one);
+            let lo = got[0].unwrap_or_else(|| panic!("{f0} {beyond}: no low end"));
+            assert!((-0.5..1.6).contains(&(lo.s - 5.0)), "{f0} {beyond}: {lo:?}");
+            assert!(got[1].is_none(), "{got:?}");
+            // Printed from the first bin: none.
+            let (prof, law) = sweep_from(f0, f64::NEG_INFINITY, 1e9, beyond, 0.004, 5);
+            assert_eq!(find(&prof, &law, &one), [None, None], "{f0} {beyond}");
+        }
+    }
+}
+
+#[test]
+fn noise_alone_moves_no_end() {
+    let one = |_: f64| 1.0;
+    for seed in 1..40 {
+        for noise in [0.002, 0.02, 0.1] {
+            let (prof, law) = sweep(1e9, 1.0, noise, seed);
+            let got = find(&prof, &law, &one);
+            assert!(got == [None, None], "seed {seed} noise {noise}: {got:?}");
+        }
+    }
+}
+
+#[test]
+fn broken_profiles_give_no_end() {
+    let one = |_: f64| 1.0;
+    let (mut prof, law) = sweep(595.0, 1.0, 0.0, 1);
+    let nan = |_: f64| f64::NAN;
+    assert_eq!(find(&prof, &law, &nan), [None, None]);
+    prof.y.iter_mut().for_each(|y| *y = 0.5);
+    assert_eq!(find(&prof, &law, &one), [None, None], "flat");
+    prof.y[100] = f64::NAN;
+    let _ = find(&prof, &law, &one);
+    prof.s.truncate(10);
+    assert_eq!(find(&prof, &law, &one), [None, None], "short");
+}
