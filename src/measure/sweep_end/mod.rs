@@ -381,6 +381,9 @@ fn surround_end(prof: &Profile, law: &PhaseLaw, s_per_px: &dyn Fn(f64) -> f64) -
     }
     let step = SURROUND_STEP_PX * px;
     let reach = MAX_SURROUND_FRACTION * (edge - first);
+    if !(reach > step && reach.is_finite()) {
+        return None;
+    }
     // The level over the bins with s in (a, b]: the constant of a level,
     // cosine and sine fit.
     let level = |a: f64, b: f64| -> Option<f64> {
