@@ -271,6 +271,7 @@ def _options(
     pixel_pitch_um: Optional[float],
     refine_roi: bool,
     green_balance: bool,
+    keep_ends: bool,
     chart_index: Optional[int],
     bin_px: float,
     margin: float,
@@ -329,6 +330,7 @@ def _options(
         "chart_index": None if chart_index is None else int(chart_index),
         "refine_roi": bool(refine_roi),
         "green_balance": bool(green_balance),
+        "find_print_ends": not bool(keep_ends),
     }
     return json.dumps(opts)
 
@@ -345,6 +347,7 @@ def measure(
     pixel_pitch_um: Optional[float] = None,
     refine_roi: bool = True,
     green_balance: bool = True,
+    keep_ends: bool = False,
     chart_index: Optional[int] = None,
     bin_px: float = 0.25,
     margin: float = 0.15,
@@ -370,6 +373,9 @@ def measure(
       grey patches).
     pixel_pitch_um: pixel pitch in micrometres, for cycles/mm (files: default from EXIF).
     refine_roi: refine the roi corners to the region's edges (the CLI's default).
+    keep_ends: keep every bin of a strip, as ``--keep-ends``; by default the bins
+      beyond where the printed sweep stops inside the region (corners clicked
+      beyond the print) are left out (``print_ends_inside_px`` in the summary).
     bin_px, margin, window_cycles: bin width (px), strip margin (fraction), estimator window (cycles).
     name: stands for an array in messages.
     threads: worker threads for this call (None = all cores); threads=1 with one
@@ -381,12 +387,14 @@ def measure(
     if isinstance(photo, np.ndarray):
         arr = _array(photo)
         opts = _options(roi, target, tone, arr.dtype, method, sweep, channel, pixel_pitch_um,
-                        refine_roi, green_balance, chart_index, bin_px, margin, window_cycles)
+                        refine_roi, green_balance, keep_ends, chart_index, bin_px, margin,
+                        window_cycles)
         return Measurement(_native.measure_array(arr, opts, name, threads))
     if not isinstance(photo, (str, os.PathLike)):
         raise ValueError(f"photo must be a path or a numpy array, not {type(photo).__name__}")
     opts = _options(roi, target, tone, None, method, sweep, channel, pixel_pitch_um,
-                    refine_roi, green_balance, chart_index, bin_px, margin, window_cycles)
+                    refine_roi, green_balance, keep_ends, chart_index, bin_px, margin,
+                    window_cycles)
     return Measurement(_native.measure_path(os.fspath(photo), opts, threads))
 
 

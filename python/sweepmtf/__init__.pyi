@@ -70,6 +70,7 @@ def measure(
     pixel_pitch_um: Optional[float] = ...,
     refine_roi: bool = ...,
     green_balance: bool = ...,
+    keep_ends: bool = ...,
     chart_index: Optional[int] = ...,
     bin_px: float = ...,
     margin: float = ...,

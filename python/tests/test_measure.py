@@ -123,6 +123,21 @@ def grey_strip(dtype, gamma=1.0):
 STRIP_ROI = [(0, 10), (900, 10), (900, 110), (0, 110)]
 
 
+def test_keep_ends_keeps_the_paper_beyond_the_print():
+    """Corners 40 px beyond the sweep's printed high end, on paper: by default the
+    bins there are left out (found within 2 px); keep_ends=True keeps them, and
+    the last points read the paper as lost modulation."""
+    code = grey_strip(np.uint16).astype(np.float64) / 65535
+    code[:, 860:] = 0.92  # paper, below clipping
+    img = np.round(code * 65535).astype(np.uint16)
+    found = sweepmtf.measure(img, roi=STRIP_ROI, refine_roi=False)
+    low, high = found.summary["curves"][0]["print_ends_inside_px"]
+    assert high is not None and abs(high - 40.0) < 2.0, high
+    kept = sweepmtf.measure(img, roi=STRIP_ROI, refine_roi=False, keep_ends=True)
+    assert kept.summary["curves"][0]["print_ends_inside_px"] == [None, None]
+    assert kept.curves[0].mtf[-1] < found.curves[0].mtf[-1] - 0.1
+
+
 def test_array_kinds_agree():
     """uint16, float32, float64 and RGB arrays of the same picture give the same curve."""
     u16 = grey_strip(np.uint16)

@@ -44,7 +44,7 @@ import json, sys, time
 import sweepmtf
 from sweepmtf import _native
 shot, target = sys.argv[1], sys.argv[2]
-opts = sweepmtf._options(None, target, None, None, "fit", "auto", "luma", None, True, True, None, 0.25, 0.15, 4.0)
+opts = sweepmtf._options(None, target, None, None, "fit", "auto", "luma", None, True, True, False, None, 0.25, 0.15, 4.0)
 sweepmtf.measure(shot, target=target)
 rust, py = [], []
 for _ in range(7):
