@@ -2,7 +2,7 @@
 //! simulator's strip on white paper (a log and a linear sweep, 0.01–0.45
 //! cy/px, ≈ 830 × 80 px), its high-frequency end given 0, 4, 12, 22, 40
 //! and 75 px beyond the print (corners 2 and 3 moved along the strip), or its low end
-//! 3 px (corners 1 and 4), measured with
+//! 3, 20 and 45 px (corners 1 and 4), measured with
 //! the CLI's defaults, with the printed ends looked for (the default) and
 //! without (`--keep-ends`, as before session 35). Truth: the simulator's
 //! analytic MTF and printed contrast.
@@ -59,6 +59,8 @@ pub fn table() {
             (40.0, 0.0),
             (75.0, 0.0),
             (0.0, 3.0),
+            (0.0, 20.0),
+            (0.0, 45.0),
         ] {
             let mut quad = [c[0], c[1], c[2], c[3]];
             for k in 0..2 {

@@ -21,12 +21,14 @@ pub(super) fn refine_law(
     band_limit: &impl Fn(f64) -> f64,
 ) -> Option<(PhaseLaw, f64, usize)> {
     let mut law = start;
-    let (s_lo, s_hi) = (prof.s[0], prof.s[prof.s.len() - 1]);
+    let (s_first, s_hi) = (prof.s[0], prof.s[prof.s.len() - 1]);
     let mut result = None;
     for _ in 0..3 {
-        if !(law.freq(s_lo).is_finite() && law.freq(s_lo) > 0.0) {
+        // A linear sweep's law over a surround clicked before the print's
+        // low end falls to 0 cy and below there: fitted from where it rises.
+        let Some(s_lo) = positive_from(&law, s_first, s_hi) else {
             return result;
-        }
+        };
         let table = PhaseTable::new(prof, &law);
         // One fit per cycle up to 0.85 of the band limit, computed in parallel,
         // then accepted in order while the phase shift stays continuous.
@@ -87,6 +89,33 @@ pub(super) fn refine_law(
         }
     }
     result
+}
+
+/// Where a law's frequency is positive in `s_lo..s_hi` (strip units): `s_lo`
+/// where it already is there; else where it rises through a thousandth of
+/// its value at `s_hi` (a linear law extrapolated over a surround before the
+/// print's low end, where no print can be). None where it is not positive
+/// at `s_hi`.
+pub(super) fn positive_from(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Option<f64> {
+    let f_hi = law.freq(s_hi);
+    if !(f_hi > 0.0 && f_hi.is_finite() && s_lo <= s_hi) {
+        return None;
+    }
+    let f_lo = law.freq(s_lo);
+    if f_lo > 0.0 && f_lo.is_finite() {
+        return Some(s_lo);
+    }
+    let floor = 1e-3 * f_hi;
+    let (mut a, mut b) = (s_lo, s_hi);
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if law.freq(m) > floor {
+            b = m;
+        } else {
+            a = m;
+        }
+    }
+    Some(b)
 }
 
 /// Output positions: at least one cycle apart and at most ~1/300 of the frequency range apart.

@@ -155,13 +155,18 @@ pub(super) fn measure_strip(
             super::MAX_LAW_RMS_CYCLES
         )));
     }
-    let total_cycles = law.phase(prof.length) - law.phase(0.0);
+    // Where the law's frequency is positive: from the region's start, or,
+    // where a linear sweep's low end was clicked beyond the print, from
+    // inside it (`sweep_end` cuts the bins before).
+    let s_rise = super::frequency::positive_from(&law, 0.0f64.min(prof.s[0]), prof.length);
+    let s_from = s_rise.unwrap_or(0.0);
+    let total_cycles = law.phase(prof.length) - law.phase(s_from);
     if total_cycles < 5.0 || n_resolved < 5 {
         return Err(Failure::TooSmall(format!(
             "{channel}/{id}: the strip holds {total_cycles:.1} cycles; at least 5 are needed"
         )));
     }
-    if law.freq(0.0) <= 0.0 || law.freq(prof.length) <= law.freq(0.0) {
+    if s_rise.is_none() || law.freq(prof.length) <= law.freq(s_from) {
         return Err(Failure::NoOscillation(format!(
             "{channel}/{id}: the frequency does not rise along the strip (corners 1 and 4 must be on the low-frequency edge)"
         )));

@@ -5,6 +5,11 @@
 //! 0.0029 with exact corners). The printed end is now found where the
 //! oscillation stops (`measure::sweep_end`) and the bins beyond it left out.
 //!
+//! Session 36: the high end 40 and 75 px beyond (the surround walked over
+//! to the print), and the low end 20 and 45 px beyond, where a linear
+//! sweep's law falls to 0 cy inside the region: before, the linear strip
+//! was refused ("the oscillation is too weak or irregular to follow").
+//!
 //! Truth: the simulator's analytic MTF and printed contrast; the print's end
 //! is where the simulator's exact corners put it.
 //!
@@ -56,6 +61,8 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
             (22.0, 0.0),
             (40.0, 0.0),
             (75.0, 0.0),
+            (0.0, 20.0),
+            (0.0, 45.0),
         ] {
             let mut given = [c[0], c[1], c[2], c[3]];
             for k in 0..2 {

@@ -98,10 +98,19 @@ pub(super) fn find(
     if n < 20 || prof.y.len() != n || prof.count.len() != n {
         return [None, None];
     }
+    // Bins where the law's frequency is not positive (a linear sweep's law
+    // over a surround clicked before the print's low end) are no print.
+    let rise = prof.s.partition_point(|&s| !(law.freq(s) > 0.0));
+    if rise >= n / 2 {
+        return [None, None];
+    }
     let ends = [false, true].map(|high| {
         let edge = if high { prof.s[n - 1] } else { prof.s[0] };
-        let mut bins = 0..n;
-        let mut found = None;
+        let mut bins = if high { 0..n } else { rise..n };
+        let mut found = (!high && rise > 0).then(|| PrintedEnd {
+            s: prof.s[rise],
+            inside_px: (prof.s[rise] - edge).abs() / s_per_px(prof.s[rise]),
+        });
         // An end clicked farther out than one search is followed inwards,
         // each search starting clear of the last one's blurred edge.
         for _ in 0..ROUNDS {

@@ -136,6 +136,22 @@ fn a_low_end_is_found_whatever_its_cycle() {
 }
 
 #[test]
+fn bins_where_a_linear_law_falls_to_zero_are_no_print() {
+    let one = |_: f64| 1.0;
+    // A linear law from −0.01 cy/unit at s = 0 (0 at s = 20): a low end
+    // clicked beyond the print, whose law extrapolates below 0 there; the
+    // print (0.0025 cy/unit and up) starts at s = 25, paper or black before.
+    for beyond in [1.0, 0.05] {
+        let (prof, law) = sweep_from(-0.01, 25.0, 1e9, beyond, 0.004, 9);
+        assert!(law.freq(0.0) < 0.0 && law.freq(30.0) > 0.0);
+        let got = find(&prof, &law, &one);
+        let lo = got[0].unwrap_or_else(|| panic!("{beyond}: no low end"));
+        assert!(lo.s >= 20.0 && lo.s <= 26.6, "{beyond}: {lo:?}");
+        assert!(got[1].is_none(), "{got:?}");
+    }
+}
+
+#[test]
 fn noise_alone_moves_no_end() {
     let one = |_: f64| 1.0;
     for seed in 1..40 {
