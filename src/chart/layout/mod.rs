@@ -10,82 +10,18 @@
 //! mean·(1−c) of the main (first) contrast, plus grey steps. Labels and
 //! ticks lie only in bands the description leaves as background.
 
+mod spec;
+#[cfg(test)]
+mod tests;
+
+use super::ChartError;
 use super::labels::{Align, TextLabel, format_freq, text_size_mm};
-use super::{ChartError, MIN_DOTS_PER_CYCLE, WARN_DOTS_PER_CYCLE};
 use crate::target::{
     Direction, Fiducial, FiducialKind, GreyPatch, Rect, SinePatch, Sweep, SweepLaw, Target,
 };
 
-/// How frequency is laid out along the chart.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Law {
-    /// Logarithmic sweep: f(s) = f_min·(f_max/f_min)^(s/L).
-    Log,
-    /// Linear sweep: f(s) = f_min + (f_max − f_min)·s/L.
-    Linear,
-    /// Discrete constant-frequency patches, log-spaced from f_min to f_max.
-    Patches,
-}
-
-impl Law {
-    /// The law's name as used on the command line.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Law::Log => "log",
-            Law::Linear => "linear",
-            Law::Patches => "patches",
-        }
-    }
-}
-
-/// Everything that defines a chart.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ChartSpec {
-    /// Name written into the description and the title.
-    pub name: String,
-    /// Frequency layout.
-    pub law: Law,
-    /// Lowest chart frequency (cycles/mm on the print).
-    pub f_min_cy_mm: f64,
-    /// Highest chart frequency (cycles/mm on the print).
-    pub f_max_cy_mm: f64,
-    /// Page width (mm); sweeps run along it.
-    pub width_mm: f64,
-    /// Page height (mm).
-    pub height_mm: f64,
-    /// Printer resolution (dots per inch).
-    pub dpi: u32,
-    /// Modulation of each row of sweeps/patches; the first is the main one (0–1].
-    pub contrasts: Vec<f64>,
-    /// Mean linear reflectance of the sines (0–1).
-    pub mean: f64,
-    /// Number of patches per contrast for [`Law::Patches`].
-    pub patch_count: usize,
-    /// Darkest reflectance the output encoding can print (0 for sRGB/gamma).
-    pub darkest: f64,
-    /// Encoding named in the title ("sRGB", "gamma 2.2", …).
-    pub encoding_name: String,
-}
-
-impl ChartSpec {
-    /// A default spec: log sweep on A4 landscape at 600 dpi, contrast 0.8, mean 0.5.
-    pub fn new(law: Law, f_min_cy_mm: f64, f_max_cy_mm: f64) -> ChartSpec {
-        ChartSpec {
-            name: "sweepmtf chart".into(),
-            law,
-            f_min_cy_mm,
-            f_max_cy_mm,
-            width_mm: 297.0,
-            height_mm: 210.0,
-            dpi: 600,
-            contrasts: vec![0.8],
-            mean: 0.5,
-            patch_count: 12,
-            darkest: 0.0,
-            encoding_name: "sRGB".into(),
-        }
-    }
-}
+use spec::check_spec;
+pub use spec::{ChartSpec, Law};
 
 /// A laid-out chart: the description plus human-readable marks and the raster size.
 #[derive(Debug, Clone)]
@@ -110,93 +46,6 @@ pub struct Chart {
 
 /// Grey steps (linear reflectance) besides white and black.
 pub const GREY_STEPS: [f64; 6] = [0.05, 0.1, 0.2, 0.35, 0.5, 0.7];
-
-fn check_spec(s: &ChartSpec) -> Result<(f64, Vec<String>), ChartError> {
-    let inv = |m: String| Err(ChartError::Invalid(m));
-    let fin = |v: f64| v.is_finite();
-    if !(fin(s.f_min_cy_mm) && s.f_min_cy_mm > 0.0) {
-        return inv(format!(
-            "--f-min {} must be a positive frequency (cycles/mm)",
-            s.f_min_cy_mm
-        ));
-    }
-    if !(fin(s.f_max_cy_mm) && s.f_max_cy_mm > 0.0) {
-        return inv(format!(
-            "--f-max {} must be a positive frequency (cycles/mm)",
-            s.f_max_cy_mm
-        ));
-    }
-    if s.f_min_cy_mm >= s.f_max_cy_mm {
-        return inv(format!(
-            "--f-min {} must be below --f-max {}",
-            s.f_min_cy_mm, s.f_max_cy_mm
-        ));
-    }
-    if !(fin(s.width_mm) && fin(s.height_mm) && s.width_mm > 0.0 && s.height_mm > 0.0) {
-        return inv(format!(
-            "chart size {}×{} mm must be positive",
-            s.width_mm, s.height_mm
-        ));
-    }
-    if !(25..=10_000).contains(&s.dpi) {
-        return inv(format!("--dpi {} must lie between 25 and 10000", s.dpi));
-    }
-    if s.contrasts.is_empty() {
-        return inv("at least one contrast is needed".into());
-    }
-    if !(fin(s.mean) && s.mean > 0.0 && s.mean < 1.0) {
-        return inv(format!("--mean {} must lie in (0, 1)", s.mean));
-    }
-    for &c in &s.contrasts {
-        if !(fin(c) && c > 0.0 && c <= 1.0) {
-            return inv(format!("contrast {c} must lie in (0, 1]"));
-        }
-        if s.mean * (1.0 + c) > 1.0 + 1e-12 {
-            return inv(format!(
-                "mean {} × (1 + contrast {c}) = {:.4} exceeds paper white (1); lower --mean or the contrast",
-                s.mean,
-                s.mean * (1.0 + c)
-            ));
-        }
-        if s.mean * (1.0 - c) < s.darkest - 1e-12 {
-            return inv(format!(
-                "mean {} × (1 − contrast {c}) = {:.4} is darker than the printer's black ({:.4}); \
-                 lower the contrast or raise --mean",
-                s.mean,
-                s.mean * (1.0 - c),
-                s.darkest
-            ));
-        }
-    }
-    if s.law == Law::Patches && !(2..=60).contains(&s.patch_count) {
-        return inv(format!(
-            "--patches {} must lie between 2 and 60",
-            s.patch_count
-        ));
-    }
-    let dpc = s.dpi as f64 / 25.4 / s.f_max_cy_mm;
-    let mut warnings = Vec::new();
-    if dpc < MIN_DOTS_PER_CYCLE {
-        return inv(format!(
-            "--f-max {} cy/mm leaves {:.2} printer dots per cycle at {} dpi; at least {} are needed \
-             (raise --dpi to {} or lower --f-max to {})",
-            s.f_max_cy_mm,
-            dpc,
-            s.dpi,
-            MIN_DOTS_PER_CYCLE,
-            (MIN_DOTS_PER_CYCLE * 25.4 * s.f_max_cy_mm).ceil(),
-            format_freq(s.dpi as f64 / 25.4 / MIN_DOTS_PER_CYCLE)
-        ));
-    }
-    if dpc < WARN_DOTS_PER_CYCLE {
-        warnings.push(format!(
-            "only {:.2} printer dots per cycle at {} cy/mm ({} dpi): the printed highest frequencies \
-             will not be clean sines; {} dots per cycle or more are advised",
-            dpc, s.f_max_cy_mm, s.dpi, WARN_DOTS_PER_CYCLE
-        ));
-    }
-    Ok((dpc, warnings))
-}
 
 /// Candidate tick frequencies in [lo, hi], most important first.
 fn tick_candidates(law: Law, lo: f64, hi: f64) -> Vec<f64> {
@@ -577,118 +426,4 @@ pub fn layout(spec: &ChartSpec) -> Result<Chart, ChartError> {
         dots_per_cycle: dpc,
         warnings,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a4_log_layout_follows_conventions() {
-        let c = layout(&ChartSpec::new(Law::Log, 0.5, 10.0)).unwrap();
-        let t = &c.target;
-        assert_eq!(t.fiducials.len(), 4);
-        let d = 0.04 * 210.0;
-        assert!((t.fiducials[0].diameter_mm - d).abs() < 1e-12);
-        assert_eq!(t.fiducials[0].kind, FiducialKind::Ring);
-        assert!((t.fiducials[2].x_mm - (297.0 - d)).abs() < 1e-12);
-        let white = t.greys.iter().find(|g| g.id == "white").unwrap();
-        assert!((white.reflectance - 0.9).abs() < 1e-12);
-        // Nothing but background within one diameter of a fiducial (outside its own square).
-        for s in &t.sweeps {
-            for f in &t.fiducials {
-                let r = &s.rect;
-                let dx = (f.x_mm - (r.x_mm + r.width_mm).min(f.x_mm.max(r.x_mm))).abs();
-                let dy = (f.y_mm - (r.y_mm + r.height_mm).min(f.y_mm.max(r.y_mm))).abs();
-                assert!(dx.max(dy) >= d, "{} near {}", s.id, f.id);
-            }
-        }
-        // Labels lie on background (away from every described region).
-        for l in &c.texts {
-            let r = l.rect();
-            for (x, y) in [
-                (r.x_mm, r.y_mm),
-                (r.x_mm + r.width_mm, r.y_mm + r.height_mm),
-                (r.x_mm + r.width_mm / 2.0, r.y_mm + r.height_mm / 2.0),
-            ] {
-                assert_eq!(t.reflectance(x, y), 1.0, "label '{}' at {x},{y}", l.text);
-            }
-        }
-        assert!(c.ticks.len() >= 4);
-    }
-
-    #[test]
-    fn marks_stay_on_background_for_many_layouts() {
-        // Every label box and tick (sampled on a grid) lies inside the page, on
-        // background, and outside every fiducial's keep-out square.
-        for (w, h) in [
-            (297.0, 210.0),
-            (420.0, 297.0),
-            (210.0, 148.0),
-            (120.0, 80.0),
-            (600.0, 200.0),
-        ] {
-            for law in [Law::Log, Law::Linear, Law::Patches] {
-                for contrasts in [vec![0.8], vec![0.8, 0.4, 0.2]] {
-                    let mut s = ChartSpec::new(law, 0.3, 4.0);
-                    s.width_mm = w;
-                    s.height_mm = h;
-                    s.contrasts = contrasts;
-                    let c = layout(&s).unwrap();
-                    let t = &c.target;
-                    let rects = c
-                        .texts
-                        .iter()
-                        .map(|l| l.rect())
-                        .chain(c.ticks.iter().copied());
-                    for r in rects {
-                        for a in 0..=8 {
-                            for b in 0..=4 {
-                                let x = r.x_mm + r.width_mm * a as f64 / 8.0;
-                                let y = r.y_mm + r.height_mm * b as f64 / 4.0;
-                                assert!(
-                                    x >= 0.0 && x <= w && y >= 0.0 && y <= h,
-                                    "{w}×{h} {law:?}"
-                                );
-                                assert_eq!(t.reflectance(x, y), 1.0, "{w}×{h} {law:?} at {x},{y}");
-                                for f in &t.fiducials {
-                                    let d = f.diameter_mm;
-                                    assert!(
-                                        (x - f.x_mm).abs() >= d || (y - f.y_mm).abs() >= d,
-                                        "{w}×{h} {law:?}: mark at {x},{y} near {}",
-                                        f.id
-                                    );
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn refuses_under_two_dots_and_warns_under_four() {
-        let mut s = ChartSpec::new(Law::Linear, 1.0, 10.0);
-        s.dpi = 100; // 3.94 dots/mm: 0.39 dots per cycle at 10 cy/mm
-        assert!(layout(&s).is_err());
-        s.dpi = 900; // 3.54 dots per cycle
-        let c = layout(&s).unwrap();
-        assert_eq!(c.warnings.len(), 1);
-    }
-
-    #[test]
-    fn bad_inputs() {
-        let mut s = ChartSpec::new(Law::Log, 2.0, 1.0);
-        assert!(layout(&s).is_err());
-        s.f_min_cy_mm = 0.0;
-        assert!(layout(&s).is_err());
-        let mut s = ChartSpec::new(Law::Log, 0.5, 5.0);
-        s.contrasts = vec![1.2];
-        assert!(layout(&s).is_err());
-        s.contrasts = vec![0.8];
-        s.width_mm = 10.0;
-        s.height_mm = 8.0;
-        assert!(matches!(layout(&s), Err(ChartError::TooLarge(_))));
-    }
 }
