@@ -64,6 +64,15 @@ pub enum LocateError {
     /// The given region could not be refined (edges not found, bad corners).
     #[error("cannot refine the region: {0}")]
     Refine(String),
+    /// A strip's printed bars were seen clearly, slanted across its given
+    /// ends farther than refining may turn them (px across the strip at its
+    /// low and high ends; the largest turn allowed, px).
+    #[error(
+        "the printed bars run {0:.1} / {1:.1} px across the strip off its given low / high ends, \
+         more than the {2:.1} px refining may turn them: corners this far off the strip's ends \
+         smear its bars across the bins; place the corners on the strip's ends"
+    )]
+    EndsSlanted(f64, f64, f64),
     /// The image is empty or too small to search.
     #[error("image of {0}×{1} samples is too small to search for a chart")]
     TooSmall(usize, usize),

@@ -241,7 +241,7 @@ pub fn measure_raw_frame(
                 // Only the region and the search band around it are converted.
                 let c = bbox_crop(&given, frame.width, frame.height, REFINE_SEARCH_PX + 8.0);
                 let plane = frame.location_plane_within((c.x0, c.y0, c.x1, c.y1));
-                refine_or_keep(&Gray::of_plane(&plane), given, target, &mut said)
+                refine_or_keep(&Gray::of_plane(&plane), given, target, &mut said).map_err(err)?
             } else {
                 given
             }
@@ -299,7 +299,7 @@ pub fn measure_decoded(
                     crop,
                     at: pixel_converter(dec, &file_tone(dec).0, Channel::Luma),
                 };
-                refine_or_keep(&src, given, target, &mut said)
+                refine_or_keep(&src, given, target, &mut said).map_err(err)?
             } else {
                 given
             }

@@ -55,7 +55,9 @@ pub struct MeasureOptions {
     pub chart_index: Option<usize>,
     /// Refine the given `roi` corners to the region's edges (corners good to about
     /// ±[`REFINE_SEARCH_PX`]); when the edges are not clearly seen, the corners are
-    /// used as given, with a warning.
+    /// used as given, with a warning; a strip whose bars are seen clearly but
+    /// slanted across its given ends farther than refining may turn them is
+    /// refused ([`Failure::Unreliable`](super::Failure::Unreliable)).
     pub refine_roi: bool,
     /// Raw Bayer files: scale the second green lattice to the first's level
     /// before binning the greens together ([`crate::photo::raw::balance_greens`]).

@@ -444,8 +444,13 @@ pub fn refine_roi<S: AtImage + ?Sized>(
     let max_slant = 2.0 * search_px + 4.0;
     if target.is_none() {
         // The ends kept the user's (slanted) lines: turn them along the printed bars.
-        let fit = super::strip_ends::align_ends_settled(full, &h, max_slant)
-            .map_err(|m| LocateError::Refine(format!("strip ends: {m}")))?;
+        let fit =
+            super::strip_ends::align_ends_settled(full, &h, max_slant).map_err(|e| match e {
+                super::strip_ends::EndsError::Slanted(px, max) => {
+                    LocateError::EndsSlanted(px[0], px[1], max)
+                }
+                e => LocateError::Refine(format!("strip ends: {e}")),
+            })?;
         out = fit.corners;
     }
     check_quad(&out).map_err(|e| LocateError::Refine(e.to_string()))?;

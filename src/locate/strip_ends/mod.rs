@@ -204,6 +204,30 @@ fn fit_line(ws: &[WinSlant]) -> Option<LineFit> {
     })
 }
 
+/// Why the ends could not be turned along the bars.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EndsError {
+    /// The bars were seen clearly, slanted across the strip farther than
+    /// the corners' range allows (px across the strip at the low and high
+    /// ends, and that range): corners this far off the strip's ends.
+    Slanted([f64; 2], f64),
+    /// The bars' direction was not clearly seen (why).
+    Unclear(String),
+}
+
+impl std::fmt::Display for EndsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            EndsError::Slanted(px, max) => write!(
+                f,
+                "the bars' direction found ({:.1} / {:.1} px across the strip) is beyond the corners' range ({max:.1} px)",
+                px[0], px[1]
+            ),
+            EndsError::Unclear(why) => f.write_str(why),
+        }
+    }
+}
+
 /// Finds the bars' slant in the strip `h` (unit square → image, long edges fitted,
 /// ends already inside the strip) and returns the corners whose end lines run
 /// along the bars through the current ends' centre points. `max_slant_px` bounds
@@ -212,15 +236,15 @@ pub fn align_ends<S: AtImage + ?Sized>(
     g: &S,
     h: &Homography,
     max_slant_px: f64,
-) -> Result<EndsFit, String> {
+) -> Result<EndsFit, EndsError> {
     let dist = |p: Point, q: Point| (p[0] - q[0]).hypot(p[1] - q[1]);
     let len_px = dist(h.apply([0.0, 0.5]), h.apply([1.0, 0.5]));
     let wid_px = 0.5 * (dist(h.apply([0.0, 0.0]), h.apply([0.0, 1.0])))
         + 0.5 * dist(h.apply([1.0, 0.0]), h.apply([1.0, 1.0]));
     if !(len_px.is_finite() && wid_px.is_finite()) || len_px < 64.0 || wid_px < 8.0 {
-        return Err(format!(
+        return Err(EndsError::Unclear(format!(
             "the strip ({len_px:.0} × {wid_px:.0} px) is too small to see its bars' direction"
-        ));
+        )));
     }
     let n = ((len_px / STEP_PX).ceil() as usize + 1).min(60_000);
     // About one line per pixel across the strip (at most 32: enough samples on a
@@ -249,13 +273,15 @@ pub fn align_ends<S: AtImage + ?Sized>(
             Some(only) => window_slants(&bands, h, range, step, Some(only), false),
         };
         if ws.len() < 4 {
-            return Err(format!(
+            return Err(EndsError::Unclear(format!(
                 "the bars' direction is not clearly seen ({} of {WINDOWS} windows along the strip)",
                 ws.len()
-            ));
+            )));
         }
         let Some(fit) = fit_line(&ws) else {
-            return Err("the bars' direction is not clearly seen (windows disagree)".into());
+            return Err(EndsError::Unclear(
+                "the bars' direction is not clearly seen (windows disagree)".into(),
+            ));
         };
         let span = {
             let us: Vec<f64> = ws.iter().map(|w| w.u).collect();
@@ -271,14 +297,14 @@ pub fn align_ends<S: AtImage + ?Sized>(
         ];
         let carries = span >= 0.3 || (span >= 0.1 && sigma_px.iter().all(|v| *v <= 0.25));
         if fit.inliers < 4 || !carries {
-            return Err(format!(
+            return Err(EndsError::Unclear(format!(
                 "the bars' direction is seen over too little of the strip ({} windows over {:.0} %; \
                  ends predicted to ±{:.2} / ±{:.2} px)",
                 fit.inliers,
                 100.0 * span,
                 sigma_px[0],
                 sigma_px[1]
-            ));
+            )));
         }
         s = Slant {
             a: s.a + fit.line.a,
@@ -298,20 +324,20 @@ pub fn align_ends<S: AtImage + ?Sized>(
         }
     });
     let slant_px = [turn[0] * px_per_u(0.0), turn[1] * px_per_u(1.0)];
-    if found_px
-        .iter()
-        .any(|v| !v.is_finite() || v.abs() > max_slant_px)
-    {
-        return Err(format!(
-            "the bars' direction found ({:.1} / {:.1} px across the strip) is beyond the corners' range",
-            found_px[0], found_px[1]
+    if found_px.iter().any(|v| !v.is_finite()) {
+        return Err(EndsError::Unclear(
+            "the bars' direction found is not finite".into(),
         ));
     }
     if last.1 > 0.3 {
-        return Err(format!(
+        return Err(EndsError::Unclear(format!(
             "the bars' direction is unclear (windows scatter {:.2} px about the fit)",
             last.1
-        ));
+        )));
+    }
+    // Seen clearly, but farther off than corners within the range can be.
+    if found_px.iter().any(|v| v.abs() > max_slant_px) {
+        return Err(EndsError::Slanted(found_px, max_slant_px));
     }
     let corners = [
         h.apply([-0.5 * turn[0], 0.0]),
@@ -343,7 +369,7 @@ pub fn align_ends_settled<S: AtImage + ?Sized>(
     g: &S,
     h: &Homography,
     max_slant_px: f64,
-) -> Result<EndsFit, String> {
+) -> Result<EndsFit, EndsError> {
     let mut fit = align_ends(g, h, max_slant_px)?;
     let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
     for _ in 0..ENDS_ROUNDS {
@@ -531,6 +557,6 @@ mod tests {
         )
         .unwrap();
         let e = align_ends(&g, &given, 20.0).unwrap_err();
-        assert!(e.contains("not clearly seen"), "{e}");
+        assert!(e.to_string().contains("not clearly seen"), "{e}");
     }
 }
