@@ -91,11 +91,19 @@ pub(super) fn refine_law(
     result
 }
 
+/// Farthest into a strip (fraction of its length) a law's frequency may
+/// rise from 0 for the stretch before to be taken as surround clicked
+/// beyond the print's low end: a law that is not positive over more is no
+/// sweep's (an aliased channel's crossings, where that channel is measured
+/// along luma's law instead).
+const MAX_RISE_FRACTION: f64 = 0.1;
+
 /// Where a law's frequency is positive in `s_lo..s_hi` (strip units): `s_lo`
 /// where it already is there; else where it rises through a thousandth of
 /// its value at `s_hi` (a linear law extrapolated over a surround before the
-/// print's low end, where no print can be). None where it is not positive
-/// at `s_hi`.
+/// print's low end, where no print can be), if within
+/// [`MAX_RISE_FRACTION`] of the span. None where it is not positive at
+/// `s_hi` or rises only farther in.
 pub(super) fn positive_from(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Option<f64> {
     let f_hi = law.freq(s_hi);
     if !(f_hi > 0.0 && f_hi.is_finite() && s_lo <= s_hi) {
@@ -115,7 +123,7 @@ pub(super) fn positive_from(law: &PhaseLaw, s_lo: f64, s_hi: f64) -> Option<f64>
             a = m;
         }
     }
-    Some(b)
+    (b - s_lo <= MAX_RISE_FRACTION * (s_hi - s_lo)).then_some(b)
 }
 
 /// Output positions: at least one cycle apart and at most ~1/300 of the frequency range apart.

@@ -459,7 +459,10 @@ fn measure_planes_lens(
             };
             // A channel whose own crossings cannot be followed (red or blue
             // of a demosaicked mosaic, aliased from ¼ cy/px) is measured
-            // along the law an earlier channel (luma) found on the same strip.
+            // along the law an earlier channel (luma) found on the same strip;
+            // so is one whose own law gave a curve lost in noise (since a law
+            // rising from 0 cy inside the strip is taken, session 36, blue's
+            // aliased crossings can give one).
             let earlier = curves
                 .iter()
                 .find(|c: &&Curve| c.sweep_id == *id)
@@ -467,7 +470,11 @@ fn measure_planes_lens(
             match (measured(None), earlier) {
                 (Ok(c), _) => Ok((c, None)),
                 (
-                    Err(e @ (Failure::NoOscillation(_) | Failure::ModulationUnknown(_))),
+                    Err(
+                        e @ (Failure::NoOscillation(_)
+                        | Failure::ModulationUnknown(_)
+                        | Failure::Unreliable(_)),
+                    ),
                     Some((by, law)),
                 ) if tlaw.is_none() => {
                     let why = e.to_string();
