@@ -74,7 +74,7 @@ pub(super) fn raw_read_window(roi: &[Point; 4]) -> Crop {
 /// a warning saying why) when the edges are not clearly seen; refused where
 /// a strip's bars are seen clearly, slanted across its given ends farther
 /// than refining may turn them (its bins would smear them: the independent
-/// study's strips clicked ±30 px off read MTF50 63–75 % low, claiming ±0.6 %).
+/// study's strips clicked ±30 px off: one read MTF50 75 % low, claiming ±0.6 %).
 pub(super) fn refine_or_keep<S: crate::locate::AtImage + ?Sized>(
     src: &S,
     given: [Point; 4],

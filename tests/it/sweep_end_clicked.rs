@@ -136,7 +136,7 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
 /// An end clicked slanted across the strip farther than refining may turn it
 /// (corners 2 and 3 moved 15 px each way along the strip: 30 px of slant
 /// across it) is refused, not measured: the bins would smear the bars, and
-/// before session 36 such strips read MTF50 63–75 % low claiming ±0.6 %
+/// before session 36 one such strip read MTF50 75 % low claiming ±0.6 %
 /// (the independent study, corners clicked ±30 px). Slanted by 6 px, the
 /// refinement (the CLI's default) turns the end along the bars as before.
 #[test]
