@@ -26,9 +26,21 @@ use sweepmtf::simulate::{Camera, encode::PhotoFormat, mtf_at, render};
 use sweepmtf::target::SweepLaw;
 
 use crate::system_support::aps_c_f4 as system;
+use sweepmtf::measure::Curve;
+use sweepmtf::photo::decode::Decoded;
+use sweepmtf::simulate::TruthRow;
 
-#[test]
-fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
+/// The simulator's strip (16-bit PNG, 0.01–0.45 cy/px) with its truth, its
+/// printed contrast, its exact corners and the unit vector along it.
+struct Clicked {
+    dec: Decoded,
+    truth: Vec<TruthRow>,
+    contrast: f64,
+    corners: [[f64; 2]; 4],
+    along: [f64; 2],
+}
+
+fn strip(law: SweepLaw) -> Clicked {
     let cam = Camera {
         width_px: 1200,
         height_px: 800,
@@ -40,17 +52,48 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
         rotate_deg: -3.0,
         ..Camera::default()
     };
+    let t = demo_target_for(&cam, law, 0.01, 0.45).unwrap();
+    let shot = render(&t, &system(), &cam).unwrap();
+    let dec = decode_bytes(&shot.encode(PhotoFormat::Png).unwrap(), "ends_clicked").unwrap();
+    let r = shot.roi().unwrap();
+    let corners: [[f64; 2]; 4] = std::array::from_fn(|i| [r[2 * i], r[2 * i + 1]]);
+    let c = corners;
+    let len = (c[1][0] - c[0][0]).hypot(c[1][1] - c[0][1]);
+    Clicked {
+        dec,
+        truth: shot.truth().unwrap().rows.clone(),
+        contrast: t.sweeps[0].contrast,
+        corners,
+        along: [(c[1][0] - c[0][0]) / len, (c[1][1] - c[0][1]) / len],
+    }
+}
+
+/// A curve's (RMS, worst) |MTF − truth| over its unaliased points in 0.01–0.45 cy/px.
+fn errors(cv: &Curve, truth: &[TruthRow]) -> (f64, f64) {
+    let (mut se, mut n, mut worst) = (0.0, 0usize, 0.0f64);
+    for p in cv
+        .points
+        .iter()
+        .filter(|p| !p.aliased && (0.01..=0.45).contains(&p.freq_cy_px))
+    {
+        let e = p.mtf - mtf_at(truth, p.freq_cy_px);
+        se += e * e;
+        n += 1;
+        worst = worst.max(e.abs());
+    }
+    ((se / n as f64).sqrt(), worst)
+}
+
+#[test]
+fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
     for law in [SweepLaw::Log, SweepLaw::Linear] {
-        let t = demo_target_for(&cam, law, 0.01, 0.45).unwrap();
-        let contrast = t.sweeps[0].contrast;
-        let shot = render(&t, &system(), &cam).unwrap();
-        let bytes = shot.encode(PhotoFormat::Png).unwrap();
-        let dec = decode_bytes(&bytes, "ends_clicked").unwrap();
-        let truth = shot.truth().unwrap();
-        let exact = shot.roi().unwrap();
-        let c: Vec<[f64; 2]> = (0..4).map(|i| [exact[2 * i], exact[2 * i + 1]]).collect();
-        let len = (c[1][0] - c[0][0]).hypot(c[1][1] - c[0][1]);
-        let along = [(c[1][0] - c[0][0]) / len, (c[1][1] - c[0][1]) / len];
+        let Clicked {
+            dec,
+            truth,
+            contrast,
+            corners: c,
+            along,
+        } = strip(law);
         // (high end beyond, low end beyond), px along the strip
         for (hi, lo) in [
             (0.0, 0.0),
@@ -64,7 +107,7 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
             (0.0, 20.0),
             (0.0, 45.0),
         ] {
-            let mut given = [c[0], c[1], c[2], c[3]];
+            let mut given = c;
             for k in 0..2 {
                 given[1][k] += hi * along[k];
                 given[2][k] += hi * along[k];
@@ -77,18 +120,7 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
             };
             let m = measure_decoded(&dec, "ends_clicked", None, &opts).unwrap();
             let cv = &m.curves[0];
-            let (mut se, mut n, mut worst) = (0.0, 0usize, 0.0f64);
-            for p in cv
-                .points
-                .iter()
-                .filter(|p| !p.aliased && (0.01..=0.45).contains(&p.freq_cy_px))
-            {
-                let e = p.mtf - mtf_at(&truth.rows, p.freq_cy_px);
-                se += e * e;
-                n += 1;
-                worst = worst.max(e.abs());
-            }
-            let rms = (se / n as f64).sqrt();
+            let (rms, worst) = errors(cv, &truth);
             let cm = cv.chart_modulation / contrast - 1.0;
             eprintln!(
                 "{law:?} beyond {hi} / {lo} px: RMS {rms:.4} worst {worst:.4} chart mod. {:+.2} % ends found {:?}",
@@ -105,12 +137,7 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
                 let k = measure_decoded(&dec, "ends_clicked", None, &keep).unwrap();
                 let kc = &k.curves[0];
                 assert_eq!(kc.print_ends_inside_px, [None, None], "{what}");
-                let kept_worst = kc
-                    .points
-                    .iter()
-                    .filter(|p| !p.aliased && (0.01..=0.45).contains(&p.freq_cy_px))
-                    .map(|p| (p.mtf - mtf_at(&truth.rows, p.freq_cy_px)).abs())
-                    .fold(0.0, f64::max);
+                let kept_worst = errors(kc, &truth).1;
                 assert!(kept_worst > 0.1, "{what}: kept, worst {kept_worst}");
             }
             assert!(rms <= 0.002, "{what}: RMS {rms}");
@@ -142,27 +169,15 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
 #[test]
 fn an_end_slanted_beyond_the_refinement_is_refused() {
     use sweepmtf::measure::Failure;
-    let cam = Camera {
-        width_px: 1200,
-        height_px: 800,
-        chart_px: Some(1000.0),
-        full_well_e: Some(60000.0),
-        read_noise_e: 2.0,
-        bits: 16,
-        seed: 5,
-        rotate_deg: -3.0,
-        ..Camera::default()
-    };
-    let t = demo_target_for(&cam, SweepLaw::Linear, 0.01, 0.45).unwrap();
-    let shot = render(&t, &system(), &cam).unwrap();
-    let dec = decode_bytes(&shot.encode(PhotoFormat::Png).unwrap(), "slanted").unwrap();
-    let truth = shot.truth().unwrap();
-    let exact = shot.roi().unwrap();
-    let c: Vec<[f64; 2]> = (0..4).map(|i| [exact[2 * i], exact[2 * i + 1]]).collect();
-    let len = (c[1][0] - c[0][0]).hypot(c[1][1] - c[0][1]);
-    let along = [(c[1][0] - c[0][0]) / len, (c[1][1] - c[0][1]) / len];
+    let Clicked {
+        dec,
+        truth,
+        corners: c,
+        along,
+        ..
+    } = strip(SweepLaw::Linear);
     for (half, refused) in [(3.0, false), (15.0, true)] {
-        let mut given = [c[0], c[1], c[2], c[3]];
+        let mut given = c;
         for k in 0..2 {
             given[1][k] -= half * along[k];
             given[2][k] += half * along[k];
@@ -183,13 +198,7 @@ fn an_end_slanted_beyond_the_refinement_is_refused() {
             }
             Ok(m) => {
                 assert!(!refused, "{half} px: measured");
-                let cv = &m.curves[0];
-                let worst = cv
-                    .points
-                    .iter()
-                    .filter(|p| !p.aliased && (0.01..=0.45).contains(&p.freq_cy_px))
-                    .map(|p| (p.mtf - mtf_at(&truth.rows, p.freq_cy_px)).abs())
-                    .fold(0.0, f64::max);
+                let worst = errors(&m.curves[0], &truth).1;
                 assert!(worst < 0.02, "{half} px: worst {worst}");
             }
         }
