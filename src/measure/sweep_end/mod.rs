@@ -21,9 +21,11 @@
 //! end found there is searched again from just inside it, so an end clicked
 //! up to about 24 px beyond the print is found (tested to 22 px). Farther,
 //! the first search sees no sweep at all: at the high end, a surround whose
-//! level steps to the sweep's mean (paper or a dark frame) is then walked
-//! over to where it meets the print ([`surround_end`], up to a quarter of
-//! the strip), and the search starts there.
+//! level steps to the sweep's mean (paper or a dark frame), or that shows no
+//! oscillation where the print beyond it starts whole (a grey equal to the
+//! sweep's mean), is then walked over to where it meets the print
+//! ([`surround_end`], up to a quarter of the strip), and the search starts
+//! there.
 
 use super::law::PhaseLaw;
 use super::profile::Profile;
@@ -372,14 +374,20 @@ fn find_end(
 /// sweep, meets it: the bins are walked inwards in stretches of
 /// [`SURROUND_STEP_PX`], each fitted by a level and the sweep's cosine and
 /// sine (so part of a cycle does not move the level), while the level stays
-/// the surround's; where it leaves it, the level one stretch farther in must
+/// the surround's. Where it leaves it, the level one stretch farther in must
 /// differ from the surround's by [`MIN_STEP`] (a step, not the light's slow
 /// change, nor a sweep whose modulation has faded: its level stays its
-/// mean). Returns the end (exclusive bin index) for the next search: one
-/// stretch of surround beyond the stretch where the level changed. None
-/// where the cycle there is long (one stretch would not hold one), the
-/// surround is not followed to a step within [`MAX_SURROUND_FRACTION`] of
-/// the strip, or the bins cannot be fitted.
+/// mean). Where the region's end shows no oscillation and one appears at
+/// the surround's level (a grey equal to the sweep's mean), the two
+/// stretches farther in must both show it clearly ([`SWEEP_GAIN`]) and at
+/// one amplitude (within [`SAME_AMPLITUDE`]): the print's edge, where the
+/// sweep starts whole, not a modulation growing back from a fade or from a
+/// zero of the MTF (defocus), which grows from stretch to stretch. Returns
+/// the end (exclusive bin index) for the next search: one stretch of
+/// surround beyond the stretch where the level or the oscillation changed.
+/// None where the cycle there is long (one stretch would not hold one), the
+/// surround is not followed to such a change within
+/// [`MAX_SURROUND_FRACTION`] of the strip, or the bins cannot be fitted.
 fn surround_end(prof: &Profile, law: &PhaseLaw, s_per_px: &dyn Fn(f64) -> f64) -> Option<usize> {
     let n = prof.s.len();
     let (first, edge) = (*prof.s.first()?, *prof.s.last()?);
@@ -393,46 +401,102 @@ fn surround_end(prof: &Profile, law: &PhaseLaw, s_per_px: &dyn Fn(f64) -> f64) -
     if !(reach > step && reach.is_finite()) {
         return None;
     }
-    // The level over the bins with s in (a, b]: the constant of a level,
-    // cosine and sine fit.
-    let level = |a: f64, b: f64| -> Option<f64> {
-        let lo = prof.s.partition_point(|&v| v <= a);
-        let hi = prof.s.partition_point(|&v| v <= b);
-        let mut nrm = Normal::<3>::new();
-        let mut rows = 0;
-        for k in lo..hi {
-            if prof.is_clipped(k) || !(prof.count[k] > 0.0) || !prof.y[k].is_finite() {
-                continue;
-            }
-            let (sn, cs) = (TAU * law.phase(prof.s[k])).sin_cos();
-            nrm.add(&[1.0, cs, sn], prof.y[k], prof.count[k]);
-            rows += 1;
-        }
-        if rows < 8 {
-            return None;
-        }
-        let beta = nrm.solve()?;
-        beta[0].is_finite().then_some(beta[0])
-    };
-    let mut prev = level(edge - step, edge)?;
+    let fit = |b: f64| stretch_fit(prof, law, b - step, b);
+    let end_fit = fit(edge)?;
+    // The region's end shows no oscillation: the surround may be a grey.
+    let quiet = end_fit.gain < NO_SWEEP_GAIN;
+    let mut prev = end_fit.level;
     let mut k = 1.0;
     loop {
         let b = edge - k * step;
         if edge - (b - step) > reach {
             return None;
         }
-        let here = level(b - step, b)?;
-        if (here - prev).abs() <= SURROUND_TOLERANCE * prev.abs().max(here.abs()) {
-            prev = here;
+        let here = fit(b)?;
+        let kept = |a: f64, b: f64| (a - b).abs() <= SURROUND_TOLERANCE * a.abs().max(b.abs());
+        if kept(here.level, prev) {
+            // At the surround's level: the oscillation starts here (a grey),
+            // the sweep whole one stretch in and the next alike? (Where the
+            // level steps one stretch in, the walk goes on to the step.)
+            if quiet && here.gain >= NO_SWEEP_GAIN {
+                let in1 = fit(b - step)?;
+                if kept(in1.level, here.level) {
+                    let in2 = fit(b - 2.0 * step)?;
+                    let ratio = in1.amp / in2.amp;
+                    let whole = in1.gain >= SWEEP_GAIN
+                        && in2.gain >= SWEEP_GAIN
+                        && (1.0 / SAME_AMPLITUDE..=SAME_AMPLITUDE).contains(&ratio);
+                    return whole.then(|| prof.s.partition_point(|&v| v <= b + step).min(n));
+                }
+            }
+            prev = here.level;
             k += 1.0;
             continue;
         }
         // The level changed in (b − step, b]: a step to the sweep's mean?
-        let inside = level(b - 2.0 * step, b - step)?;
+        let inside = fit(b - step)?.level;
         let big = prev.abs().max(inside.abs());
         return ((inside - prev).abs() > MIN_STEP * big && big > 0.0)
             .then(|| prof.s.partition_point(|&v| v <= b + step).min(n));
     }
+}
+
+/// Below this gain (the oscillation's share of a stretch's squared
+/// residual, in units of its noise variance: χ² with 2 degrees of freedom
+/// for noise alone, above 16 once in 3000) a stretch shows no oscillation.
+const NO_SWEEP_GAIN: f64 = 16.0;
+
+/// The gain of a stretch that shows the sweep clearly: its amplitude known
+/// to 5 % (1/√gain).
+const SWEEP_GAIN: f64 = 400.0;
+
+/// Most the amplitudes of the two stretches inside a grey surround may
+/// differ (ratio): a modulation growing back from 0 at a zero of the MTF
+/// grows as the distance from it (2:3, 3:4 in the first stretches); the
+/// sweep's own, over 16 px, by a few per cent.
+const SAME_AMPLITUDE: f64 = 1.25;
+
+/// A stretch of bins fitted by a level and the sweep's cosine and sine.
+struct StretchFit {
+    /// The level (the profile's units).
+    level: f64,
+    /// The oscillation's amplitude (the profile's units).
+    amp: f64,
+    /// The oscillation's reduction of the weighted squared residual, in
+    /// units of the residual's noise variance per unit weight.
+    gain: f64,
+}
+
+/// Fits the bins with s in (a, b] by a level and the law's cosine and sine;
+/// None with fewer than 8 bins or a singular fit.
+fn stretch_fit(prof: &Profile, law: &PhaseLaw, a: f64, b: f64) -> Option<StretchFit> {
+    let lo = prof.s.partition_point(|&v| v <= a);
+    let hi = prof.s.partition_point(|&v| v <= b);
+    let mut nrm = Normal::<3>::new();
+    let mut rows = 0;
+    for k in lo..hi {
+        if prof.is_clipped(k) || !(prof.count[k] > 0.0) || !prof.y[k].is_finite() {
+            continue;
+        }
+        let (sn, cs) = (TAU * law.phase(prof.s[k])).sin_cos();
+        nrm.add(&[1.0, cs, sn], prof.y[k], prof.count[k]);
+        rows += 1;
+    }
+    if rows < 8 {
+        return None;
+    }
+    let beta = nrm.solve()?;
+    let full = nrm.rss()?;
+    let flat = (nrm.yy - nrm.aty[0] * nrm.aty[0] / nrm.w).max(0.0);
+    // A noise-free stretch: its variance floored far below any noise.
+    let floor = 1e-12 * nrm.yy / nrm.w;
+    let var = (full / (rows - 3) as f64).max(floor);
+    let gain = (flat - full).max(0.0) / var;
+    (beta.iter().all(|v| v.is_finite()) && gain.is_finite()).then(|| StretchFit {
+        level: beta[0],
+        amp: beta[1].hypot(beta[2]),
+        gain,
+    })
 }
 
 /// The constant's weighted squared residual.

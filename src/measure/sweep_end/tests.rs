@@ -95,25 +95,83 @@ fn a_surround_longer_than_one_search_is_stepped_over_to_the_print() {
 }
 
 #[test]
-fn no_step_in_level_is_no_surround() {
+fn a_grey_surround_at_the_sweeps_mean_is_walked_over_to_the_print() {
     let one = |_: f64| 1.0;
-    // A grey equal to the sweep's mean 60 px beyond: the oscillation's
-    // stop alone, which one search reaching the print would see, is
-    // not followed that far (the documented limit).
-    let (prof, law) = sweep(540.0, 0.5, 0.004, 7);
-    assert_eq!(find(&prof, &law, &one)[1], None, "grey");
-    // A sweep whose modulation fades to nothing long before the end (a
-    // soft lens: σ 3 px) and light falling 3:1 along the strip: no end.
+    // Only the oscillation stops there: no step in level. (Per-bin noise
+    // 0.004 against a modulation of 0.037 at the print's end; at 0.008 the
+    // sweep's stretches are told from the grey with a gain of only 330–410,
+    // under `SWEEP_GAIN`, and the grey is kept, as before.)
+    for inside in [30.0, 60.0, 100.0, 140.0] {
+        for (noise, seed) in [(0.004, 7), (0.004, 8), (0.004, 9), (0.0, 1)] {
+            let end = 600.0 - inside;
+            let (prof, law) = sweep(end, 0.5, noise, seed);
+            let got = find(&prof, &law, &one);
+            let hi = got[1].unwrap_or_else(|| panic!("grey {inside} px, noise {noise}: none"));
+            // The oscillation's blurred stop (no step in level) reads up to
+            // 1 px beyond it (the cut leaves out 1 px more; the measured
+            // curve: `tests/it/sweep_end_clicked.rs`).
+            assert!(
+                (-1.6..1.5).contains(&(hi.s - end)),
+                "grey {inside} px, noise {noise}: end {end} found at {}",
+                hi.s
+            );
+            assert!(got[0].is_none(), "a low end found {got:?}");
+        }
+    }
+    // Beyond a quarter of the strip: not followed.
+    let (prof, law) = sweep(400.0, 0.5, 0.004, 7);
+    assert_eq!(find(&prof, &law, &one)[1], None);
+}
+
+/// The chirp of [`sweep`] printed to its end, its modulation at s scaled by
+/// `mtf(f)` (f in cy/unit), under light falling `light`:1 along the strip.
+fn sweep_with_mtf(
+    mtf: impl Fn(f64) -> f64,
+    light: f64,
+    noise: f64,
+    seed: u64,
+) -> (Profile, PhaseLaw) {
     let (mut prof, law) = linear_profile(0.05, 0.3 / 600.0, 600.0, |_, _| 0.0);
-    let mut st = 11;
+    let mut st = seed;
     for k in 0..prof.s.len() {
         let s = prof.s[k];
-        let att = (-2.0 * (std::f64::consts::PI * law.freq(s) * 3.0).powi(2)).exp();
-        let light = 3.0f64.powf(-s / 600.0);
-        prof.y[k] = light * 0.5 * (1.0 + 0.3 * att * (TAU * law.phase(s)).cos())
-            + 0.004 * lcg_normal(&mut st);
+        let light = light.powf(-s / 600.0);
+        let m = mtf(law.freq(s));
+        prof.y[k] = light * 0.5 * (1.0 + 0.3 * m * (TAU * law.phase(s)).cos())
+            + noise * lcg_normal(&mut st);
     }
-    assert_eq!(find(&prof, &law, &one), [None, None], "faded, uneven light");
+    (prof, law)
+}
+
+#[test]
+fn a_modulation_that_fades_or_grows_back_from_zero_is_no_surround() {
+    let one = |_: f64| 1.0;
+    let gauss = |sig: f64| move |f: f64| (-2.0 * (std::f64::consts::PI * f * sig).powi(2)).exp();
+    for seed in [11, 12, 13] {
+        // Faded to nothing long before the end (a soft lens: σ 3 px).
+        let (prof, law) = sweep_with_mtf(gauss(3.0), 3.0, 0.004, seed);
+        assert_eq!(find(&prof, &law, &one), [None, None], "σ 3, seed {seed}");
+        // Faded to the noise within the walk's reach (σ 1.6 px: below 3 %
+        // of the print's modulation over the last 60 px).
+        let (prof, law) = sweep_with_mtf(gauss(1.6), 3.0, 0.004, seed);
+        assert_eq!(surround_end(&prof, &law, &one), None, "σ 1.6, seed {seed}");
+        assert_eq!(find(&prof, &law, &one), [None, None], "σ 1.6, seed {seed}");
+        // A zero of the MTF 60 or 100 px inside the end (defocus), nothing
+        // after it, the modulation growing back from it inwards: |1 − f/f0|.
+        for zero_at in [540.0, 500.0] {
+            let (_, law) = linear_profile(0.05, 0.3 / 600.0, 600.0, |_, _| 0.0);
+            let f0 = law.freq(zero_at);
+            let ramp = move |f: f64| (1.0 - f / f0).max(0.0);
+            for (light, noise) in [(3.0, 0.004), (1.0, 0.004), (1.0, 0.0005), (1.0, 0.0001)] {
+                let (prof, law) = sweep_with_mtf(ramp, light, noise, seed);
+                let what = format!("zero at {zero_at}, light {light}, noise {noise}, seed {seed}");
+                // The walk itself takes no such growth for an edge (the
+                // change-point search after it would not find one either).
+                assert_eq!(surround_end(&prof, &law, &one), None, "{what}");
+                assert_eq!(find(&prof, &law, &one)[1], None, "{what}");
+            }
+        }
+    }
 }
 
 #[test]
