@@ -56,7 +56,11 @@ the JPEG's Y′, `bayer_truth`), bayerall (that with uneven light, the code
 sharpened and q75–92), bayernl (bayer's shots demosaicked by Menon et
 al.'s directional, non-linear method instead; session 29; needs
 colour-demosaicing). EXTRA="--tone file" passes options to `measure`;
-SHOW_TONE=1 prints the tone correction and its black level found; with
+SHOW_TONE=1 prints the tone correction and its black level found;
+P_<name>=value overrides one of a shot's parameters (P_click=N: corners
+clicked up to ±N px off; P_beyond=N: the high end's corners N px past the
+print along the strip; P_surround=R: the chart around the strip of
+reflectance R instead of white paper, e.g. 0.5, the sweep's mean); with
 KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay
 (KEEP_ALL=dir: each shot in dir/KIND_SEED_I). Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
@@ -163,7 +167,8 @@ def undistort(x, y, p):
 
 
 def reflectance(u, v, p):
-    """The printed chart at (u, v) mm: the sweep strip on white paper."""
+    """The printed chart at (u, v) mm: the sweep strip on white paper (or
+    on the surround's reflectance, P_surround)."""
     L, h, f0, f1 = p["L"], p["h"], p["f0"], p["f1"]
     inside = (u >= 0) & (u <= L) & (v >= 0) & (v <= h)
     uc = np.clip(u, 0, L)
@@ -174,7 +179,7 @@ def reflectance(u, v, p):
         k = math.log(f1 / f0) / L
         ph = 2 * np.pi * f0 / k * (np.exp(k * uc) - 1)
     sweep = 0.5 * (1 + 0.8 * np.sin(ph))
-    return np.where(inside, sweep, 1.0)
+    return np.where(inside, sweep, p["surround"])
 
 
 def strip_geometry(p):
@@ -477,6 +482,8 @@ def draw(kind, rng):
         fmt="jpeg",
         quality=85,
         click=0.0,
+        beyond=0.0,
+        surround=1.0,
         tone=0.0,
         code_amount=0.0,
         code_radius=1.0,
@@ -591,6 +598,13 @@ def measure(img, corners, p, tmp):
         im.save(path, quality=p["quality"], subsampling=2)
     else:
         im.save(path)
+    # The high end's corners placed `beyond` px past the print along the strip.
+    if p["beyond"]:
+        (x0, y0), (x1, y1) = corners[0], corners[1]
+        d = math.hypot(x1 - x0, y1 - y0)
+        ax, ay = (x1 - x0) / d, (y1 - y0) / d
+        corners = [corners[0], (corners[1][0] + p["beyond"] * ax, corners[1][1] + p["beyond"] * ay),
+                   (corners[2][0] + p["beyond"] * ax, corners[2][1] + p["beyond"] * ay), corners[3]]
     # Corners as a user clicks them: exact, or off by up to ±click px in x and y.
     jitter = np.random.default_rng(len(corners) + int(1e6 * p["theta"]) % 1000).uniform(-1, 1, 8) * p["click"]
     roi = ",".join(f"{v + j:.2f}" for v, j in zip([v for c in corners for v in c], jitter))

@@ -4,7 +4,9 @@
 //! and 75 px beyond the print (corners 2 and 3 moved along the strip), or its low end
 //! 3, 20 and 45 px (corners 1 and 4), measured with
 //! the CLI's defaults, with the printed ends looked for (the default) and
-//! without (`--keep-ends`, as before session 35). Truth: the simulator's
+//! without (`--keep-ends`, as before session 35). Session 37: the same
+//! strip on a grey background at the sweep's mean (no step in level beyond
+//! its ends), its high end 40 and 75 px beyond. Truth: the simulator's
 //! analytic MTF and printed contrast.
 
 use std::time::Instant;
@@ -34,8 +36,33 @@ pub fn table() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("targets/systems/aps_c_f4.toml");
     let system = sweepmtf::model::System::from_file(&path).expect("aps_c_f4.toml");
-    for law in [SweepLaw::Log, SweepLaw::Linear] {
-        let t = demo_target_for(&cam, law, 0.01, 0.45).expect("target");
+    let paper: &[(f64, f64)] = &[
+        (0.0, 0.0),
+        (4.0, 0.0),
+        (12.0, 0.0),
+        (22.0, 0.0),
+        (40.0, 0.0),
+        (75.0, 0.0),
+        (0.0, 3.0),
+        (0.0, 20.0),
+        (0.0, 45.0),
+    ];
+    let grey: &[(f64, f64)] = &[(0.0, 0.0), (40.0, 0.0), (75.0, 0.0)];
+    for (law, on_grey) in [
+        (SweepLaw::Log, false),
+        (SweepLaw::Linear, false),
+        (SweepLaw::Log, true),
+        (SweepLaw::Linear, true),
+    ] {
+        let mut t = demo_target_for(&cam, law, 0.01, 0.45).expect("target");
+        if on_grey {
+            t.background = t.sweeps[0].mean;
+        }
+        let name = if on_grey {
+            format!("{law:?} on grey")
+        } else {
+            format!("{law:?}")
+        };
         let contrast = t.sweeps[0].contrast;
         let shot = render(&t, &system, &cam).expect("render");
         let bytes = shot.encode(PhotoFormat::Png).expect("encode");
@@ -51,17 +78,7 @@ pub fn table() {
         let c: Vec<[f64; 2]> = (0..4).map(|i| [r[2 * i], r[2 * i + 1]]).collect();
         let len = (c[1][0] - c[0][0]).hypot(c[1][1] - c[0][1]);
         let along = [(c[1][0] - c[0][0]) / len, (c[1][1] - c[0][1]) / len];
-        for (beyond, low) in [
-            (0.0, 0.0),
-            (4.0, 0.0),
-            (12.0, 0.0),
-            (22.0, 0.0),
-            (40.0, 0.0),
-            (75.0, 0.0),
-            (0.0, 3.0),
-            (0.0, 20.0),
-            (0.0, 45.0),
-        ] {
+        for &(beyond, low) in if on_grey { grey } else { paper } {
             let mut quad = [c[0], c[1], c[2], c[3]];
             for k in 0..2 {
                 quad[1][k] += beyond * along[k];
@@ -87,9 +104,7 @@ pub fn table() {
                 let m = match res {
                     Ok(m) => m,
                     Err(e) => {
-                        println!(
-                            "| {law:?} | {beyond} / {low} | {label} | failed: {e} | | | | | |"
-                        );
+                        println!("| {name} | {beyond} / {low} | {label} | failed: {e} | | | | | |");
                         continue;
                     }
                 };
@@ -115,7 +130,7 @@ pub fn table() {
                     .map(|e| e.map_or_else(|| "none".into(), |d| format!("{d:.1}")))
                     .join(" / ");
                 println!(
-                    "| {law:?} | {beyond} / {low} | {label} | {:.4} | {worst:.4} | {e50} | {:+.2} | {found} | {ms:.1} |",
+                    "| {name} | {beyond} / {low} | {label} | {:.4} | {worst:.4} | {e50} | {:+.2} | {found} | {ms:.1} |",
                     (se / n.max(1) as f64).sqrt(),
                     100.0 * (cv.chart_modulation / contrast - 1.0),
                 );
