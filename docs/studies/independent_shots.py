@@ -60,7 +60,8 @@ SHOW_TONE=1 prints the tone correction and its black level found;
 P_<name>=value overrides one of a shot's parameters (P_click=N: corners
 clicked up to ±N px off; P_beyond=N: the high end's corners N px past the
 print along the strip; P_surround=R: the chart around the strip of
-reflectance R instead of white paper, e.g. 0.5, the sweep's mean); with
+reflectance R instead of white paper, e.g. 0.5, the sweep's mean;
+P_f1_px=F: the sweep printed up to F cy/px); with
 KEEP=dir (and ONLY=i) the shot, its truth and its corners (roi.txt) stay
 (KEEP_ALL=dir: each shot in dir/KIND_SEED_I). Prints one line per shot
 and a summary row: RMS |MTF − truth| over 0.01–0.45 cy/px, the MTF50 error and
@@ -573,6 +574,10 @@ def draw(kind, rng):
     for k, v in os.environ.items():
         if k.startswith("P_") and k[2:] in p:
             p[k[2:]] = v if k[2:] in ("fmt", "sweep", "bayer") else int(v) if k[2:] == "quality" else float(v)
+    # P_f1_px=F: the sweep printed up to F cy/px instead (e.g. below the
+    # band limit, so that what lies beyond its high end is scored).
+    if "P_f1_px" in os.environ:
+        p["f1"] = float(os.environ["P_f1_px"]) * p["len_px"] / p["L"]
     return p
 
 

@@ -154,7 +154,11 @@ fn a_modulation_that_fades_or_grows_back_from_zero_is_no_surround() {
         // Faded to the noise within the walk's reach (σ 1.6 px: below 3 %
         // of the print's modulation over the last 60 px).
         let (prof, law) = sweep_with_mtf(gauss(1.6), 3.0, 0.004, seed);
-        assert_eq!(surround_end(&prof, &law, &one), None, "σ 1.6, seed {seed}");
+        assert_eq!(
+            surround_end(&prof, &law, &one, prof.s.len()),
+            None,
+            "σ 1.6, seed {seed}"
+        );
         assert_eq!(find(&prof, &law, &one), [None, None], "σ 1.6, seed {seed}");
         // A zero of the MTF 60 or 100 px inside the end (defocus), nothing
         // after it, the modulation growing back from it inwards: |1 − f/f0|.
@@ -167,7 +171,11 @@ fn a_modulation_that_fades_or_grows_back_from_zero_is_no_surround() {
                 let what = format!("zero at {zero_at}, light {light}, noise {noise}, seed {seed}");
                 // The walk itself takes no such growth for an edge (the
                 // change-point search after it would not find one either).
-                assert_eq!(surround_end(&prof, &law, &one), None, "{what}");
+                assert_eq!(
+                    surround_end(&prof, &law, &one, prof.s.len()),
+                    None,
+                    "{what}"
+                );
                 assert_eq!(find(&prof, &law, &one)[1], None, "{what}");
             }
         }
