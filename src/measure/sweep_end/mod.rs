@@ -25,7 +25,8 @@
 //! oscillation where the print beyond it starts whole (a grey equal to the
 //! sweep's mean), is then walked over to where it meets the print
 //! ([`surround_end`], up to a quarter of the strip), and the search starts
-//! there.
+//! there. The walk also starts where the searches stopped inside the
+//! surround (a JPEG's block edge in a grey, taken for an end).
 
 use super::law::PhaseLaw;
 use super::profile::Profile;

@@ -121,6 +121,29 @@ fn a_grey_surround_at_the_sweeps_mean_is_walked_over_to_the_print() {
     // Beyond a quarter of the strip: not followed.
     let (prof, law) = sweep(400.0, 0.5, 0.004, 7);
     assert_eq!(find(&prof, &law, &one)[1], None);
+    // A step of 2 % in the grey 5 px inside the region's end (a JPEG's
+    // block edge) is taken for an end by the first search; the walk then
+    // starts there and goes on to the print.
+    for inside in [40.0, 75.0] {
+        let end = 600.0 - inside;
+        let (mut prof, law) = sweep(end, 0.5, 0.002, 5);
+        for (s, y) in prof.s.iter().zip(prof.y.iter_mut()) {
+            if *s > 595.0 {
+                *y += 0.01;
+            }
+        }
+        let first = find_end(&prof, &law, &one, true, 0..prof.s.len());
+        assert!(
+            first.is_some_and(|s| s > 590.0),
+            "{inside}: first search {first:?}"
+        );
+        let hi = find(&prof, &law, &one)[1].unwrap_or_else(|| panic!("{inside}: none"));
+        assert!(
+            (-1.6..1.5).contains(&(hi.s - end)),
+            "block edge, grey {inside} px: end {end} found at {}",
+            hi.s
+        );
+    }
 }
 
 /// The chirp of [`sweep`] printed to its end, its modulation at s scaled by
