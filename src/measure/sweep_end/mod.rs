@@ -503,7 +503,7 @@ fn stretch_fit(prof: &Profile, law: &PhaseLaw, a: f64, b: f64) -> Option<Stretch
     }
     let beta = nrm.solve()?;
     let full = nrm.rss()?;
-    let flat = (nrm.yy - nrm.aty[0] * nrm.aty[0] / nrm.w).max(0.0);
+    let flat = level_rss(&nrm)?;
     // A noise-free stretch: its variance floored far below any noise.
     let floor = 1e-12 * nrm.yy / nrm.w;
     let var = (full / (rows - 3) as f64).max(floor);
@@ -515,8 +515,8 @@ fn stretch_fit(prof: &Profile, law: &PhaseLaw, a: f64, b: f64) -> Option<Stretch
     })
 }
 
-/// The constant's weighted squared residual.
-fn level_rss(n: &Normal<2>) -> Option<f64> {
+/// The constant's weighted squared residual (the first regressor being 1).
+fn level_rss<const P: usize>(n: &Normal<P>) -> Option<f64> {
     (n.w > 0.0).then(|| (n.yy - n.aty[0] * n.aty[0] / n.w).max(0.0))
 }
 
