@@ -44,13 +44,29 @@ struct Clicked {
     along: [f64; 2],
 }
 
-fn strip(law: SweepLaw) -> Clicked {
-    strip_on(law, None)
+impl Clicked {
+    /// The exact corners with the high end moved `hi` px and the low end
+    /// `lo` px beyond the print, along the strip.
+    fn given(&self, hi: f64, lo: f64) -> [[f64; 2]; 4] {
+        let (mut given, along) = (self.corners, self.along);
+        for k in 0..2 {
+            given[1][k] += hi * along[k];
+            given[2][k] += hi * along[k];
+            given[0][k] -= lo * along[k];
+            given[3][k] -= lo * along[k];
+        }
+        given
+    }
 }
 
-/// [`strip`] on a chart whose background has reflectance `background`
-/// (the simulator's paper where None).
-fn strip_on(law: SweepLaw, background: Option<f64>) -> Clicked {
+/// The strip on the simulator's paper.
+fn strip(law: SweepLaw) -> Clicked {
+    strip_on(law, false)
+}
+
+/// [`strip`] on a chart whose background is a grey at the sweep's mean
+/// reflectance (`grey`) or the simulator's paper.
+fn strip_on(law: SweepLaw, grey: bool) -> Clicked {
     let cam = Camera {
         width_px: 1200,
         height_px: 800,
@@ -63,8 +79,8 @@ fn strip_on(law: SweepLaw, background: Option<f64>) -> Clicked {
         ..Camera::default()
     };
     let mut t = demo_target_for(&cam, law, 0.01, 0.45).unwrap();
-    if let Some(b) = background {
-        t.background = b;
+    if grey {
+        t.background = t.sweeps[0].mean;
     }
     let shot = render(&t, &system(), &cam).unwrap();
     let dec = decode_bytes(&shot.encode(PhotoFormat::Png).unwrap(), "ends_clicked").unwrap();
@@ -100,13 +116,8 @@ fn errors(cv: &Curve, truth: &[TruthRow]) -> (f64, f64) {
 #[test]
 fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
     for law in [SweepLaw::Log, SweepLaw::Linear] {
-        let Clicked {
-            dec,
-            truth,
-            contrast,
-            corners: c,
-            along,
-        } = strip(law);
+        let shot = strip(law);
+        let (dec, truth, contrast) = (&shot.dec, &shot.truth, shot.contrast);
         // (high end beyond, low end beyond), px along the strip
         for (hi, lo) in [
             (0.0, 0.0),
@@ -120,20 +131,13 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
             (0.0, 20.0),
             (0.0, 45.0),
         ] {
-            let mut given = c;
-            for k in 0..2 {
-                given[1][k] += hi * along[k];
-                given[2][k] += hi * along[k];
-                given[0][k] -= lo * along[k];
-                given[3][k] -= lo * along[k];
-            }
             let opts = MeasureOptions {
-                roi: Some(given),
+                roi: Some(shot.given(hi, lo)),
                 ..MeasureOptions::default()
             };
-            let m = measure_decoded(&dec, "ends_clicked", None, &opts).unwrap();
+            let m = measure_decoded(dec, "ends_clicked", None, &opts).unwrap();
             let cv = &m.curves[0];
-            let (rms, worst) = errors(cv, &truth);
+            let (rms, worst) = errors(cv, truth);
             let cm = cv.chart_modulation / contrast - 1.0;
             eprintln!(
                 "{law:?} beyond {hi} / {lo} px: RMS {rms:.4} worst {worst:.4} chart mod. {:+.2} % ends found {:?}",
@@ -147,10 +151,10 @@ fn ends_clicked_beyond_the_print_are_cut_back_to_it() {
                     find_print_ends: false,
                     ..opts.clone()
                 };
-                let k = measure_decoded(&dec, "ends_clicked", None, &keep).unwrap();
+                let k = measure_decoded(dec, "ends_clicked", None, &keep).unwrap();
                 let kc = &k.curves[0];
                 assert_eq!(kc.print_ends_inside_px, [None, None], "{what}");
-                let kept_worst = errors(kc, &truth).1;
+                let kept_worst = errors(kc, truth).1;
                 assert!(kept_worst > 0.1, "{what}: kept, worst {kept_worst}");
             }
             assert!(rms <= 0.002, "{what}: RMS {rms}");
@@ -225,38 +229,25 @@ fn an_end_slanted_beyond_the_refinement_is_refused() {
 #[test]
 fn a_grey_surround_beyond_the_high_end_is_cut_back_to_it() {
     for law in [SweepLaw::Log, SweepLaw::Linear] {
-        let mean = demo_target_for(&Camera::default(), law, 0.01, 0.45)
-            .unwrap()
-            .sweeps[0]
-            .mean;
-        let Clicked {
-            dec,
-            truth,
-            contrast,
-            corners: c,
-            along,
-        } = strip_on(law, Some(mean));
+        let shot = strip_on(law, true);
+        let (dec, truth, contrast) = (&shot.dec, &shot.truth, shot.contrast);
         for hi in [0.0, 10.0, 40.0, 75.0] {
-            let mut given = c;
-            for k in 0..2 {
-                given[1][k] += hi * along[k];
-                given[2][k] += hi * along[k];
-            }
+            let given = shot.given(hi, 0.0);
             let opts = MeasureOptions {
                 roi: Some(given),
                 ..MeasureOptions::default()
             };
             let what = format!("{law:?}, grey {hi} px beyond");
-            let m = measure_decoded(&dec, "grey_end", None, &opts).unwrap();
+            let m = measure_decoded(dec, "grey_end", None, &opts).unwrap();
             let cv = &m.curves[0];
-            let (rms, worst) = errors(cv, &truth);
+            let (rms, worst) = errors(cv, truth);
             let cm = cv.chart_modulation / contrast - 1.0;
             let keep = MeasureOptions {
                 find_print_ends: false,
                 ..opts.clone()
             };
-            let k = measure_decoded(&dec, "grey_end", None, &keep).unwrap();
-            let (k_rms, k_worst) = errors(&k.curves[0], &truth);
+            let k = measure_decoded(dec, "grey_end", None, &keep).unwrap();
+            let (k_rms, k_worst) = errors(&k.curves[0], truth);
             eprintln!(
                 "{what}: RMS {rms:.4} worst {worst:.4} chart mod. {:+.2} % ends found {:?}; kept: RMS {k_rms:.4} worst {k_worst:.4}",
                 100.0 * cm,

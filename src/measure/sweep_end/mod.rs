@@ -417,6 +417,8 @@ fn surround_end(
     // The region's end shows no oscillation: the surround may be a grey.
     let quiet = end_fit.gain < NO_SWEEP_GAIN;
     let mut prev = end_fit.level;
+    // Two levels alike: within the light's slow change.
+    let kept = |a: f64, b: f64| (a - b).abs() <= SURROUND_TOLERANCE * a.abs().max(b.abs());
     let mut k = 1.0;
     loop {
         let b = edge - k * step;
@@ -424,7 +426,6 @@ fn surround_end(
             return None;
         }
         let here = fit(b)?;
-        let kept = |a: f64, b: f64| (a - b).abs() <= SURROUND_TOLERANCE * a.abs().max(b.abs());
         if kept(here.level, prev) {
             // At the surround's level: the oscillation starts here (a grey),
             // the sweep whole one stretch in and the next alike? (Where the
