@@ -303,3 +303,16 @@ pub fn refine_roi<S: AtImage + ?Sized>(
 ) -> Result<[Point; 4], LocateError> {
     refine::refine_roi(src, corners, target, search_px)
 }
+
+/// One strip's four corners (image px, error up to about `search_px`) with
+/// only its ends turned along the printed bars ([`strip_ends`]) and its long
+/// edges as given: for a strip whose long edges are not clearly seen (a grey
+/// surround at the sweep's mean has no edge, only the bars stop), whose bins
+/// must still run along the bars. Errors as [`refine_roi`]'s.
+pub fn turn_strip_ends<S: AtImage + ?Sized>(
+    src: &S,
+    corners: [Point; 4],
+    search_px: f64,
+) -> Result<[Point; 4], LocateError> {
+    refine::turn_strip_ends(src, corners, search_px)
+}

@@ -30,6 +30,7 @@ mod gui_batch;
 mod gui_browser;
 mod gui_magnify;
 mod gui_timing;
+mod independent_shots;
 mod jpeg_pipelined_idct;
 mod jpeg_region;
 mod jpeg_row_reduction;

@@ -333,6 +333,42 @@ fn lost_an_edge(before: &[usize], now: &[usize]) -> bool {
         .any(|(&b, &n)| b >= MIN_SIDE_POINTS && 2 * n < b)
 }
 
+/// Most an end's slant across the strip may be turned (px): corners off by
+/// up to `search_px` slant an end by up to about twice that.
+fn max_end_slant(search_px: f64) -> f64 {
+    2.0 * search_px + 4.0
+}
+
+/// The strip `h`'s (unit square → image) corners with its ends turned along
+/// the printed bars ([`super::strip_ends`]), its long edges as they are.
+fn turn_ends<S: AtImage + ?Sized>(
+    full: &S,
+    h: &Homography,
+    search_px: f64,
+) -> Result<[Point; 4], LocateError> {
+    let max_slant = max_end_slant(search_px);
+    let fit = super::strip_ends::align_ends_settled(full, h, max_slant).map_err(|e| match e {
+        super::strip_ends::EndsError::Slanted(px, max) => {
+            LocateError::EndsSlanted(px[0], px[1], max)
+        }
+        e => LocateError::Refine(format!("strip ends: {e}")),
+    })?;
+    check_quad(&fit.corners).map_err(|e| LocateError::Refine(e.to_string()))?;
+    Ok(fit.corners)
+}
+
+/// See [`super::turn_strip_ends`].
+pub fn turn_strip_ends<S: AtImage + ?Sized>(
+    full: &S,
+    corners: [Point; 4],
+    search_px: f64,
+) -> Result<[Point; 4], LocateError> {
+    check_quad(&corners).map_err(|e| LocateError::Refine(e.to_string()))?;
+    let h = Homography::from_quads(&rect_corners(0.0, 0.0, 1.0, 1.0), &corners)
+        .map_err(|e| LocateError::Refine(e.to_string()))?;
+    turn_ends(full, &h, search_px)
+}
+
 /// Edge points a side must have held for its loss to stop the refinement.
 const MIN_SIDE_POINTS: usize = 12;
 
@@ -440,18 +476,10 @@ pub fn refine_roi<S: AtImage + ?Sized>(
         before = Some(counts);
     }
     let mut out = src.map(|p| h.apply(p));
-    // Corners off by up to `search_px` slant an end by up to about twice that.
-    let max_slant = 2.0 * search_px + 4.0;
+    let max_slant = max_end_slant(search_px);
     if target.is_none() {
         // The ends kept the user's (slanted) lines: turn them along the printed bars.
-        let fit =
-            super::strip_ends::align_ends_settled(full, &h, max_slant).map_err(|e| match e {
-                super::strip_ends::EndsError::Slanted(px, max) => {
-                    LocateError::EndsSlanted(px[0], px[1], max)
-                }
-                e => LocateError::Refine(format!("strip ends: {e}")),
-            })?;
-        out = fit.corners;
+        out = turn_ends(full, &h, search_px)?;
     }
     check_quad(&out).map_err(|e| LocateError::Refine(e.to_string()))?;
     // The seen edges must lie on the refined lines; else they were not one clear edge each.

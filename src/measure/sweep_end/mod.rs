@@ -74,6 +74,13 @@ const INSIDE_CYCLES: f64 = 3.0;
 /// Fewest image px fitted inside a candidate end.
 const MIN_INSIDE_PX: f64 = 8.0;
 
+/// Fewest filled bins fitted inside a candidate end beyond the search (those
+/// of [`MIN_INSIDE_PX`] at the default 0.25 px bins): a strip along the pixel
+/// rows fills one bin per pixel, and 8 px inside a grey's edge at 0.4 cy/px
+/// then held 8 bins against the sweep model's 6 parameters (q75, turned
+/// 0.01°: gain 32 against [`MIN_GAIN`], the grey kept, RMS 0.058).
+const MIN_INSIDE_BINS: usize = 32;
+
 /// The improvement in weighted squared residual, in units of the noise
 /// variance, the split must bring to be taken: the best of some 60 candidate
 /// ends, each with 2 more parameters than the sweep alone, reached 19.5 at
@@ -299,6 +306,9 @@ fn find_end(
     if !(inside.is_finite() && search > MIN_BEYOND_PX * px) {
         return None;
     }
+    // Farther in where the bins there are sparse, up to the same bound.
+    let inside =
+        inside.max(filled_depth(prof, high, edge, search, MIN_INSIDE_BINS).min(0.3 * span));
     // Bins ordered from the inside outwards; x counts strip units from the
     // region's end, positive inwards.
     let idx: Vec<usize> = if high {
@@ -375,6 +385,21 @@ fn find_end(
     (var > 0.0 && gain > MIN_GAIN * var).then_some(if high { edge - depth } else { edge + depth })
 }
 
+/// How far inwards (strip units) from `search` beyond the region's end
+/// (`edge`) the `want`-th filled bin lies; 0 where there are fewer.
+fn filled_depth(prof: &Profile, high: bool, edge: f64, search: f64, want: usize) -> f64 {
+    let filled = |&k: &usize| prof.count[k] > 0.0 && prof.y[k].is_finite();
+    let depth = |k: usize| (prof.s[k] - edge).abs() - search;
+    let nth = if high {
+        let z = prof.s.partition_point(|&v| v <= edge - search);
+        (0..z).rev().filter(filled).nth(want - 1)
+    } else {
+        let a = prof.s.partition_point(|&v| v < edge + search);
+        (a..prof.s.len()).filter(filled).nth(want - 1)
+    };
+    nth.map_or(0.0, depth)
+}
+
 /// Where a surround beyond the high end, too long for one search to see the
 /// sweep, meets it: the bins are walked inwards in stretches of
 /// [`SURROUND_STEP_PX`], each fitted by a level and the sweep's cosine and
@@ -415,7 +440,7 @@ fn surround_end(
     let fit = |b: f64| stretch_fit(prof, law, b - step, b);
     let end_fit = fit(edge)?;
     // The region's end shows no oscillation: the surround may be a grey.
-    let quiet = end_fit.gain < NO_SWEEP_GAIN;
+    let quiet = end_fit.gain < no_sweep_gain(end_fit.dof);
     let mut prev = end_fit.level;
     // Two levels alike: within the light's slow change.
     let kept = |a: f64, b: f64| (a - b).abs() <= SURROUND_TOLERANCE * a.abs().max(b.abs());
@@ -430,7 +455,7 @@ fn surround_end(
             // At the surround's level: the oscillation starts here (a grey),
             // the sweep whole one stretch in and the next alike? (Where the
             // level steps one stretch in, the walk goes on to the step.)
-            if quiet && here.gain >= NO_SWEEP_GAIN {
+            if quiet && here.gain >= no_sweep_gain(here.dof) {
                 let in1 = fit(b - step)?;
                 if kept(in1.level, here.level) {
                     let in2 = fit(b - 2.0 * step)?;
@@ -455,12 +480,31 @@ fn surround_end(
 
 /// Below this gain (the oscillation's share of a stretch's squared
 /// residual, in units of its noise variance: χ² with 2 degrees of freedom
-/// for noise alone, above 16 once in 3000) a stretch shows no oscillation.
+/// for noise alone, above 16 once in 3000) a stretch shows no oscillation;
+/// the bound for a stretch of few bins is [`no_sweep_gain`].
 const NO_SWEEP_GAIN: f64 = 16.0;
 
+/// [`NO_SWEEP_GAIN`] for a stretch whose noise variance comes from `dof`
+/// degrees of freedom: the gain is then 2·F(2, dof) for noise alone, whose
+/// tail P(F > x) = (1 + 2x/dof)^(−dof/2) reaches the same 1 in 3000
+/// (e^−8) at 2x = dof·(e^(16/dof) − 1): 118 for the 8 bins of a strip along
+/// the pixel rows (one filled bin per pixel; 16 there read 23 on noise),
+/// 16 as dof grows.
+fn no_sweep_gain(dof: f64) -> f64 {
+    if dof <= 1.0 {
+        return f64::INFINITY;
+    }
+    (dof * (NO_SWEEP_GAIN / dof).exp_m1()).max(NO_SWEEP_GAIN)
+}
+
 /// The gain of a stretch that shows the sweep clearly: its amplitude known
-/// to 5 % (1/√gain).
-const SWEEP_GAIN: f64 = 400.0;
+/// to 7 % (1/√gain), so the ratio of two such is known to 10 % and
+/// [`SAME_AMPLITUDE`] lies 4 σ out for one amplitude. (It was 400 until
+/// session 38: a q75 strip along the pixel rows under defocus, whose print
+/// ends on a modulation of 0.13, showed its sweep at 250 and 390 and kept
+/// its grey, RMS 0.042. The unit tests' fades and MTF zeros are refused
+/// down to 100 and taken at 50.)
+const SWEEP_GAIN: f64 = 200.0;
 
 /// Most the amplitudes of the two stretches inside a grey surround may
 /// differ (ratio): a modulation growing back from 0 at a zero of the MTF
@@ -482,6 +526,8 @@ struct StretchFit {
     /// The oscillation's reduction of the weighted squared residual, in
     /// units of the residual's noise variance per unit weight.
     gain: f64,
+    /// Degrees of freedom of that noise variance (bins less 3).
+    dof: f64,
 }
 
 /// Fits the bins with s in (a, b] by a level and the law's cosine and sine;
@@ -513,6 +559,7 @@ fn stretch_fit(prof: &Profile, law: &PhaseLaw, a: f64, b: f64) -> Option<Stretch
         level: beta[0],
         amp: beta[1].hypot(beta[2]),
         gain,
+        dof: (rows - 3) as f64,
     })
 }
 

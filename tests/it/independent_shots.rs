@@ -1,0 +1,123 @@
+//! Shots of the independent camera (`docs/studies/independent_shots.py`, a
+//! renderer that shares no code with sweepmtf; testdata/independent) measured
+//! from corners clicked up to ±4 px off, as a user gives them, against the
+//! renderer's exact truth, on issue 15's bars.
+
+use sweepmtf::measure::{MeasureOptions, measure_decoded};
+use sweepmtf::photo::decode::decode_bytes;
+
+const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/testdata/independent");
+
+/// The truth table of shot `stem` (frequency cycles/px, MTF), ascending.
+fn truth(stem: &str) -> Vec<(f64, f64)> {
+    let text = std::fs::read_to_string(format!("{DIR}/{stem}.truth.csv")).unwrap();
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let (f, m) = l.split_once(',').unwrap();
+            (f.parse().unwrap(), m.parse().unwrap())
+        })
+        .collect()
+}
+
+/// The truth at `f` cycles/px (linear between the table's 0.002 cy/px steps).
+fn truth_at(t: &[(f64, f64)], f: f64) -> f64 {
+    let i = t.partition_point(|r| r.0 < f).clamp(1, t.len() - 1);
+    let ((f0, m0), (f1, m1)) = (t[i - 1], t[i]);
+    m0 + (m1 - m0) * (f - f0) / (f1 - f0)
+}
+
+/// Where the truth first falls to 0.5 (cycles/px).
+fn truth_mtf50(t: &[(f64, f64)]) -> f64 {
+    let i = t.iter().position(|r| r.1 < 0.5).unwrap();
+    let ((f0, m0), (f1, m1)) = (t[i - 1], t[i]);
+    f0 + (f1 - f0) * (m0 - 0.5) / (m0 - m1)
+}
+
+/// (RMS |MTF − truth| over 0.01–0.45 cy/px, MTF50's relative error) of shot
+/// `stem` from the corners in `stem.corners.txt`, default settings.
+fn measured(stem: &str, corners: &str) -> (f64, f64) {
+    let text = std::fs::read_to_string(format!("{DIR}/{stem}.{corners}.txt")).unwrap();
+    let v: Vec<f64> = text.trim().split(',').map(|x| x.parse().unwrap()).collect();
+    let roi = [[v[0], v[1]], [v[2], v[3]], [v[4], v[5]], [v[6], v[7]]];
+    let bytes = std::fs::read(format!("{DIR}/{stem}.jpg")).unwrap();
+    let dec = decode_bytes(&bytes, stem).unwrap();
+    let opts = MeasureOptions {
+        roi: Some(roi),
+        // The CLI's default (the library's is off).
+        refine_roi: true,
+        ..MeasureOptions::default()
+    };
+    let m = measure_decoded(&dec, stem, None, &opts).unwrap();
+    let t = truth(stem);
+    let c = &m.curves[0];
+    let (mut se, mut n) = (0.0, 0);
+    for p in c.points.iter().filter(|p| !p.aliased) {
+        if (0.01..=0.45).contains(&p.freq_cy_px) {
+            se += (p.mtf - truth_at(&t, p.freq_cy_px)).powi(2);
+            n += 1;
+        }
+    }
+    let f50 = c.figures.mtf50_cy_px.expect("an MTF50");
+    let (rms, e50) = ((se / n as f64).sqrt(), f50 / truth_mtf50(&t) - 1.0);
+    eprintln!(
+        "{stem} ({corners}): RMS {rms:.4} MTF50 {:+.2} %",
+        100.0 * e50
+    );
+    (rms, e50)
+}
+
+/// A keystoned linear sweep 1116 × 108 px turned −1.55°, q85 (seed 37 shot 0).
+///
+/// The first search along the printed bars left the high end slanted by
+/// 0.48 px across the strip. Searched again, that slant read 2.0 σ of its
+/// uncertainty and the significance gate (which keeps the user's ends where
+/// the bars do not clearly say otherwise) kept it: the bins' iso-phase lines
+/// stayed tilted against the bars, RMS 0.0078 and MTF50 −1.6 %. An end the
+/// first search already turned is now corrected without that gate: RMS 0.0011,
+/// MTF50 −0.2 %, as from the exact corners.
+#[test]
+fn clicked_corners_on_a_keystoned_linear_sweep_read_like_exact_ones() {
+    let (rms_c, e50_c) = measured("keylin_s37_0", "clicked");
+    let (rms_e, e50_e) = measured("keylin_s37_0", "exact");
+    // Issue 15's keystone bar.
+    assert!(
+        rms_c <= 0.006 && e50_c.abs() <= 0.01,
+        "clicked: {rms_c} {e50_c}"
+    );
+    assert!(
+        rms_e <= 0.006 && e50_e.abs() <= 0.01,
+        "exact: {rms_e} {e50_e}"
+    );
+    // Clicked corners cost at most 0.001 of RMS against exact ones.
+    assert!(
+        rms_c <= rms_e + 0.001,
+        "clicked {rms_c} against exact {rms_e}"
+    );
+}
+
+/// A log sweep printed up to 0.4 cy/px on a grey of its mean reflectance,
+/// q75, along the pixel rows (−0.03°) under defocus, its high end clicked
+/// 40 px beyond the print (seed 41 shot 9). Its bins at the high end fill one
+/// in four, and the print ends on a modulation of 0.13: the grey was kept
+/// (RMS 0.042). Now found (session 38: the change-point search reaches as
+/// many filled bins inside, a stretch's few bins are judged quiet by their
+/// own degrees of freedom, and the sweep counts as whole at a gain of 200).
+#[test]
+fn a_grey_beyond_a_q75_strip_along_the_rows_is_cut() {
+    let (rms, e50) = measured("grey_jpeg75_s41_9", "clicked");
+    // Issue 15's bar for RGB JPEG q75 with 4:2:0 chroma and noise.
+    assert!(rms <= 0.012 && e50.abs() <= 0.01, "{rms} {e50}");
+}
+
+/// A linear sweep turned 9.4° on a grey of its mean (seed 40 `varied` shot 4),
+/// corners clicked ±4 px off. The grey shows the long edges no step, so their
+/// refinement fails ("ambiguous"), and until session 38 the corners were then
+/// used as given, ends and all: the bins ran across the bars slanted by the
+/// clicks, RMS 0.241 and MTF50 −22 % (claimed ± 0.5 %). The ends are now
+/// turned along the bars even where the long edges are kept as given.
+#[test]
+fn a_strip_on_grey_whose_long_edges_are_unseen_still_has_its_ends_turned() {
+    let (rms, e50) = measured("grey_varied_s40_4", "clicked");
+    assert!(rms <= 0.006 && e50.abs() <= 0.01, "{rms} {e50}");
+}
