@@ -185,6 +185,7 @@ fn black_level_json(b: &crate::measure::tone_black::BlackLevel) -> serde_json::V
         "used": b.used,
         "offset": b.offset,
         "offset_err": b.sigma,
+        "offset_band_spread": b.band_spread,
         "relative_to_mean": b.relative,
         "strip_mean": b.mean,
         "chart_modulation_rel_err": b.used.then(|| b.modulation_rel_err()),
