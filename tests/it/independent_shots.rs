@@ -121,3 +121,27 @@ fn a_strip_on_grey_whose_long_edges_are_unseen_still_has_its_ends_turned() {
     let (rms, e50) = measured("grey_varied_s40_4", "clicked");
     assert!(rms <= 0.006 && e50.abs() <= 0.01, "{rms} {e50}");
 }
+
+/// Everything at once under a picture style whose correction would put the
+/// values out of order, so it is not taken out (seed 45 `camera` shot 5): the
+/// chart modulation, read through the camera's curve, is 1.03 against the
+/// printed 0.8. It claimed ±0.8 %; its uncertainty now carries the curve's
+/// effect and covers the error.
+#[test]
+fn a_tone_curve_seen_but_not_taken_out_widens_the_chart_modulation() {
+    let text = std::fs::read_to_string(format!("{DIR}/camera_s45_5.exact.txt")).unwrap();
+    let v: Vec<f64> = text.trim().split(',').map(|x| x.parse().unwrap()).collect();
+    let roi = [[v[0], v[1]], [v[2], v[3]], [v[4], v[5]], [v[6], v[7]]];
+    let bytes = std::fs::read(format!("{DIR}/camera_s45_5.jpg")).unwrap();
+    let dec = decode_bytes(&bytes, "camera_s45_5").unwrap();
+    let opts = MeasureOptions {
+        roi: Some(roi),
+        refine_roi: true,
+        ..MeasureOptions::default()
+    };
+    let m = measure_decoded(&dec, "camera_s45_5", None, &opts).unwrap();
+    let c = &m.curves[0];
+    let (got, err) = (c.chart_modulation, c.chart_modulation_err);
+    eprintln!("chart modulation {got:.4} ± {err:.4} (printed 0.8)");
+    assert!((got - 0.8).abs() <= 2.0 * err, "{got} ± {err}");
+}
