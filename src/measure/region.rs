@@ -119,7 +119,8 @@ pub(super) fn refine_or_keep<S: crate::locate::AtImage + ?Sized>(
                     Ok(turned) => {
                         let moved = crate::geometry::largest_move(&given, &turned);
                         said.warnings.push(format!(
-                            "region's long edges used as given: {e}; its ends turned along                              the printed bars (corners slid up to {moved:.2} px along the strip)"
+                            "region's long edges used as given: {e}; its ends turned along \
+                             the printed bars (corners slid up to {moved:.2} px along the strip)"
                         ));
                         turned
                     }

@@ -3,7 +3,7 @@
 //! from corners clicked up to ±4 px off, as a user gives them, against the
 //! renderer's exact truth, on issue 15's bars.
 
-use sweepmtf::measure::{MeasureOptions, measure_decoded};
+use sweepmtf::measure::{MeasureOptions, Measurement, measure_decoded};
 use sweepmtf::photo::decode::decode_bytes;
 
 const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/testdata/independent");
@@ -34,9 +34,8 @@ fn truth_mtf50(t: &[(f64, f64)]) -> f64 {
     f0 + (f1 - f0) * (m0 - 0.5) / (m0 - m1)
 }
 
-/// (RMS |MTF − truth| over 0.01–0.45 cy/px, MTF50's relative error) of shot
-/// `stem` from the corners in `stem.corners.txt`, default settings.
-fn measured(stem: &str, corners: &str) -> (f64, f64) {
+/// Shot `stem` measured from the corners in `stem.corners.txt`, default settings.
+fn measure_shot(stem: &str, corners: &str) -> Measurement {
     let text = std::fs::read_to_string(format!("{DIR}/{stem}.{corners}.txt")).unwrap();
     let v: Vec<f64> = text.trim().split(',').map(|x| x.parse().unwrap()).collect();
     let roi = [[v[0], v[1]], [v[2], v[3]], [v[4], v[5]], [v[6], v[7]]];
@@ -48,7 +47,13 @@ fn measured(stem: &str, corners: &str) -> (f64, f64) {
         refine_roi: true,
         ..MeasureOptions::default()
     };
-    let m = measure_decoded(&dec, stem, None, &opts).unwrap();
+    measure_decoded(&dec, stem, None, &opts).unwrap()
+}
+
+/// (RMS |MTF − truth| over 0.01–0.45 cy/px, MTF50's relative error) of shot
+/// `stem` from the corners in `stem.corners.txt`, default settings.
+fn measured(stem: &str, corners: &str) -> (f64, f64) {
+    let m = measure_shot(stem, corners);
     let t = truth(stem);
     let c = &m.curves[0];
     let (mut se, mut n) = (0.0, 0);
@@ -129,17 +134,7 @@ fn a_strip_on_grey_whose_long_edges_are_unseen_still_has_its_ends_turned() {
 /// effect and covers the error.
 #[test]
 fn a_tone_curve_seen_but_not_taken_out_widens_the_chart_modulation() {
-    let text = std::fs::read_to_string(format!("{DIR}/camera_s45_5.exact.txt")).unwrap();
-    let v: Vec<f64> = text.trim().split(',').map(|x| x.parse().unwrap()).collect();
-    let roi = [[v[0], v[1]], [v[2], v[3]], [v[4], v[5]], [v[6], v[7]]];
-    let bytes = std::fs::read(format!("{DIR}/camera_s45_5.jpg")).unwrap();
-    let dec = decode_bytes(&bytes, "camera_s45_5").unwrap();
-    let opts = MeasureOptions {
-        roi: Some(roi),
-        refine_roi: true,
-        ..MeasureOptions::default()
-    };
-    let m = measure_decoded(&dec, "camera_s45_5", None, &opts).unwrap();
+    let m = measure_shot("camera_s45_5", "exact");
     let c = &m.curves[0];
     let (got, err) = (c.chart_modulation, c.chart_modulation_err);
     eprintln!("chart modulation {got:.4} ± {err:.4} (printed 0.8)");
