@@ -112,11 +112,22 @@ pub(super) fn refine_or_keep<S: crate::locate::AtImage + ?Sized>(
             Err(e @ crate::locate::LocateError::EndsSlanted(..)) => {
                 return Err(Failure::Unreliable(e.to_string()));
             }
-            Err(e) if target.is_none() => {
-                // The long edges not clearly seen (a grey surround at the sweep's
-                // mean shows none): the bins must still run along the bars.
-                match crate::locate::turn_strip_ends(src, given, REFINE_SEARCH_PX) {
-                    Ok(turned) => {
+            Err(e) => {
+                // Without a target, a strip whose long edges are not clearly seen
+                // (a grey surround at the sweep's mean shows none) still has its
+                // ends turned: the bins must run along the bars.
+                let turned = match target {
+                    Some(_) => None,
+                    None => match crate::locate::turn_strip_ends(src, given, REFINE_SEARCH_PX) {
+                        Ok(turned) => Some(turned),
+                        Err(e2 @ crate::locate::LocateError::EndsSlanted(..)) => {
+                            return Err(Failure::Unreliable(e2.to_string()));
+                        }
+                        Err(_) => None,
+                    },
+                };
+                match turned {
+                    Some(turned) => {
                         let moved = crate::geometry::largest_move(&given, &turned);
                         said.warnings.push(format!(
                             "region's long edges used as given: {e}; its ends turned along \
@@ -124,20 +135,12 @@ pub(super) fn refine_or_keep<S: crate::locate::AtImage + ?Sized>(
                         ));
                         turned
                     }
-                    Err(e2 @ crate::locate::LocateError::EndsSlanted(..)) => {
-                        return Err(Failure::Unreliable(e2.to_string()));
-                    }
-                    Err(_) => {
+                    None => {
                         said.warnings
                             .push(format!("region corners used as given: {e}"));
                         given
                     }
                 }
-            }
-            Err(e) => {
-                said.warnings
-                    .push(format!("region corners used as given: {e}"));
-                given
             }
         },
     )

@@ -368,49 +368,44 @@ pub(super) fn measure_strip(
     // A black level taken from the paper scales every modulation by
     // 1/(mean − α): its error is the chart modulation's too (the MTF, a
     // ratio of modulations, keeps only what differs along the strip).
-    let (m_chart_err, source) = match tone_fix.as_ref().and_then(|f| f.black.as_ref()) {
-        Some(b) if b.used => {
-            let rel = b.modulation_rel_err();
-            (
-                m_chart_err.hypot(m_chart * rel),
-                format!("{source}; ± {:.4} from the black level", m_chart * rel),
-            )
+    let black = tone_fix
+        .as_ref()
+        .and_then(|f| f.black.as_ref())
+        .filter(|b| b.used);
+    // A camera tone curve seen clearly but not taken out (it would put the
+    // values out of order): the modulations are read through it, by about
+    // its effect on an MTF of 0.5 (the independent camera's `camera` seed 45
+    // #2 and #5: effect −57 and −34 %, the chart modulation read +24 and
+    // +29 % off, claiming ±0.7 and ±0.8 %).
+    let not_taken_out = tone_fix.as_ref().filter(|f| f.needed() && !f.used);
+    let (m_chart_err, source) = if let Some(b) = black {
+        let rel = b.modulation_rel_err();
+        (
+            m_chart_err.hypot(m_chart * rel),
+            format!("{source}; ± {:.4} from the black level", m_chart * rel),
+        )
+    } else if let Some(eps) = tone_fix.as_ref().and_then(tone_unseen::scale) {
+        // Unseen, it leaves the chart modulation and, where the light
+        // changes, each point uncertain: said, not hidden.
+        let share = tone_unseen::widen(&mut points, &low, &prof, &law, eps, m_chart, |alt, low| {
+            read_chart(alt, low).ok().map(|c| c.0)
+        });
+        // MTF50 where it was given: its uncertainty from the widened points.
+        if figures.mtf50_cy_px.is_some() {
+            figures.mtf50_err_cy_px = curve::mtf50_sigma(&points);
         }
-        _ => match tone_fix.as_ref().and_then(tone_unseen::scale) {
-            // Unseen, it leaves the chart modulation and, where the light
-            // changes, each point uncertain: said, not hidden.
-            Some(eps) => {
-                let share =
-                    tone_unseen::widen(&mut points, &low, &prof, &law, eps, m_chart, |alt, low| {
-                        read_chart(alt, low).ok().map(|c| c.0)
-                    });
-                // MTF50 where it was given: its uncertainty from the widened points.
-                if figures.mtf50_cy_px.is_some() {
-                    figures.mtf50_err_cy_px = curve::mtf50_sigma(&points);
-                }
-                (
-                    m_chart_err.hypot(share),
-                    format!("{source}{}", tone_unseen::source_note(share, eps)),
-                )
-            }
-            None => match tone_fix.as_ref().filter(|f| f.needed() && !f.used) {
-                // A camera tone curve seen clearly but not taken out (it would put
-                // the values out of order): the modulations are read through it,
-                // by about its effect on an MTF of 0.5 (the independent camera's
-                // `camera` seed 45 #2 and #5: effect −57 and −34 %, the chart
-                // modulation read +24 and +29 % off, claiming ±0.7 and ±0.8 %).
-                Some(f) => {
-                    let share = m_chart * f.effect.abs();
-                    (
-                        m_chart_err.hypot(share),
-                        format!(
-                            "{source}; ± {share:.4} from the camera's tone curve, seen but not taken out"
-                        ),
-                    )
-                }
-                None => (m_chart_err, source),
-            },
-        },
+        (
+            m_chart_err.hypot(share),
+            format!("{source}{}", tone_unseen::source_note(share, eps)),
+        )
+    } else if let Some(f) = not_taken_out {
+        let share = m_chart * f.effect.abs();
+        (
+            m_chart_err.hypot(share),
+            format!("{source}; ± {share:.4} from the camera's tone curve, seen but not taken out"),
+        )
+    } else {
+        (m_chart_err, source)
     };
     let (s_first, s_last) = (
         points.iter().map(|p| p.s).fold(f64::INFINITY, f64::min),

@@ -6,25 +6,21 @@
 use sweepmtf::measure::{MeasureOptions, Measurement, measure_decoded};
 use sweepmtf::photo::decode::decode_bytes;
 
+use crate::csv_support::{read_csv, truth_at};
+
 const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/testdata/independent");
 
 /// The truth table of shot `stem` (frequency cycles/px, MTF), ascending.
 fn truth(stem: &str) -> Vec<(f64, f64)> {
-    let text = std::fs::read_to_string(format!("{DIR}/{stem}.truth.csv")).unwrap();
-    text.lines()
-        .skip(1)
-        .map(|l| {
-            let (f, m) = l.split_once(',').unwrap();
-            (f.parse().unwrap(), m.parse().unwrap())
+    read_csv(std::path::Path::new(&format!("{DIR}/{stem}.truth.csv")))
+        .iter()
+        .map(|r| {
+            (
+                r["freq_cy_px"].parse().unwrap(),
+                r["truth"].parse().unwrap(),
+            )
         })
         .collect()
-}
-
-/// The truth at `f` cycles/px (linear between the table's 0.002 cy/px steps).
-fn truth_at(t: &[(f64, f64)], f: f64) -> f64 {
-    let i = t.partition_point(|r| r.0 < f).clamp(1, t.len() - 1);
-    let ((f0, m0), (f1, m1)) = (t[i - 1], t[i]);
-    m0 + (m1 - m0) * (f - f0) / (f1 - f0)
 }
 
 /// Where the truth first falls to 0.5 (cycles/px).
