@@ -46,9 +46,18 @@ fn measure_shot(stem: &str, corners: &str) -> Measurement {
     measure_decoded(&dec, stem, None, &opts).unwrap()
 }
 
-/// (RMS |MTF − truth| over 0.01–0.45 cy/px, MTF50's relative error) of shot
-/// `stem` from the corners in `stem.corners.txt`, default settings.
-fn measured(stem: &str, corners: &str) -> (f64, f64) {
+/// A shot measured and scored against its truth.
+struct Scored {
+    /// RMS |MTF − truth| over 0.01–0.45 cy/px.
+    rms: f64,
+    /// MTF50's relative error.
+    e50: f64,
+    /// The measurement.
+    m: Measurement,
+}
+
+/// Shot `stem` from the corners in `stem.corners.txt`, default settings, scored.
+fn scored(stem: &str, corners: &str) -> Scored {
     let m = measure_shot(stem, corners);
     let t = truth(stem);
     let c = &m.curves[0];
@@ -65,7 +74,14 @@ fn measured(stem: &str, corners: &str) -> (f64, f64) {
         "{stem} ({corners}): RMS {rms:.4} MTF50 {:+.2} %",
         100.0 * e50
     );
-    (rms, e50)
+    Scored { rms, e50, m }
+}
+
+/// (RMS |MTF − truth| over 0.01–0.45 cy/px, MTF50's relative error) of shot
+/// `stem` from the corners in `stem.corners.txt`, default settings.
+fn measured(stem: &str, corners: &str) -> (f64, f64) {
+    let s = scored(stem, corners);
+    (s.rms, s.e50)
 }
 
 /// A keystoned linear sweep 1116 × 108 px turned −1.55°, q85 (seed 37 shot 0).
@@ -123,15 +139,29 @@ fn a_strip_on_grey_whose_long_edges_are_unseen_still_has_its_ends_turned() {
     assert!(rms <= 0.006 && e50.abs() <= 0.01, "{rms} {e50}");
 }
 
-/// Everything at once under a picture style whose correction would put the
-/// values out of order, so it is not taken out (seed 45 `camera` shot 5): the
-/// chart modulation, read through the camera's curve, is 1.03 against the
-/// printed 0.8. It claimed ±0.8 %; its uncertainty now carries the curve's
-/// effect and covers the error.
+/// Everything at once (keystone, distortion, light 2:1 with vignetting,
+/// sharpening, q75) under a picture style (seed 45 `camera` shot 5). Its tone
+/// fit's first two passes keep the values in order (codes moved by up to
+/// 34/255); a third, degenerate, moved them by 382/255. Until session 39 that
+/// refused the whole correction: the chart modulation read 1.03 against the
+/// printed 0.8 and MTF50 −4.9 % (claimed ± 0.8 % and ± 0.7 %). The pass that
+/// would put the values out of order is now left out and the two before it
+/// taken out: MTF50 within 2 % and within its claim, as is the chart
+/// modulation (its black level is not in the paper, which lies beyond the
+/// codes read, so its uncertainty is wide and said).
 #[test]
-fn a_tone_curve_seen_but_not_taken_out_widens_the_chart_modulation() {
-    let m = measure_shot("camera_s45_5", "exact");
-    let c = &m.curves[0];
+fn a_tone_fit_pass_that_would_disorder_the_values_is_left_out() {
+    let s = scored("camera_s45_5", "exact");
+    let c = &s.m.curves[0];
+    let fix = c.tone_fix.as_ref().expect("a tone fit");
+    assert!(fix.used && fix.passes.len() == 2, "{fix:?}");
+    let f50 = c.figures.mtf50_cy_px.unwrap();
+    let e50_claim = c.figures.mtf50_err_cy_px.unwrap() / f50;
+    assert!(
+        s.e50.abs() <= 0.02 && s.e50.abs() <= 2.0 * e50_claim,
+        "MTF50 {} ± {e50_claim}",
+        s.e50
+    );
     let (got, err) = (c.chart_modulation, c.chart_modulation_err);
     eprintln!("chart modulation {got:.4} ± {err:.4} (printed 0.8)");
     assert!((got - 0.8).abs() <= 2.0 * err, "{got} ± {err}");
