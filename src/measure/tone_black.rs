@@ -37,7 +37,8 @@ use crate::geometry::Homography;
 pub const GAP_PX: f64 = 8.0;
 /// Depth of each band of paper read, px.
 pub const DEPTH_PX: f64 = 16.0;
-/// Equal stretches the strip is cut into along its length.
+/// The strip is cut into stretches of 1/STRETCHES of its length along it
+/// (or one whole cycle, where that is longer).
 pub const STRETCHES: usize = 32;
 /// Fewest stretches a line needs.
 pub const MIN_STRETCHES: usize = 5;
@@ -199,11 +200,7 @@ pub fn find(
     // Per stretch: the strip's local mean, and each band's mean corrected
     // paper value (None where the band is missing, cut or too bright).
     let mut rows: Vec<(f64, [Option<f64>; 2])> = Vec::new();
-    for k in 0..STRETCHES {
-        let (a, b) = (
-            s0 + (s1 - s0) * k as f64 / STRETCHES as f64,
-            s0 + (s1 - s0) * (k + 1) as f64 / STRETCHES as f64,
-        );
+    for (a, b) in stretches(law, s0, s1) {
         // The strip's local mean at the stretch's middle: a sine at the
         // law's phase, and the light's trend, fitted beside it (a mean over
         // whole periods moved with the law's small phase errors: ±2 % at
@@ -314,6 +311,29 @@ pub fn find(
         why_not,
         mean: strip_mean,
     })
+}
+
+/// The stretches [a, b) of the strip [s0, s1] the black level is read over:
+/// a [`STRETCHES`]th of it each, or one whole cycle where that is longer
+/// (the local mean needs one). With equal stretches only, a log sweep's low
+/// end (a cycle of ≈ 100 px at 0.008 cy/px, a 32nd of the strip ≈ 0.3
+/// cycle) was left out, and with it the paper where the light is dimmest
+/// when it rises along the strip: the only paper dark enough to lie within
+/// the codes the strip's shape was read over.
+fn stretches(law: &PhaseLaw, s0: f64, s1: f64) -> Vec<(f64, f64)> {
+    let step = (s1 - s0) / STRETCHES as f64;
+    let mut out = Vec::new();
+    let mut a = s0;
+    while a < s1 - 0.5 * step && out.len() < STRETCHES {
+        let one_cycle = law.s_at_phase(law.phase(a) + 1.0 + 1e-6, s0, s1);
+        let b = (a + step).max(one_cycle).min(s1);
+        if !(b > a) {
+            break;
+        }
+        out.push((a, b));
+        a = b;
+    }
+    out
 }
 
 /// A profile's local mean at the middle of [a, b): least squares of a
@@ -470,10 +490,30 @@ mod tests {
     }
 
     #[test]
-    fn paper_brighter_than_the_strip_everywhere_is_not_read() {
-        // Light rising 1.8:1 towards the high-frequency end: the paper is
-        // above every code the shape was read over.
+    fn paper_beside_a_dim_low_end_is_read_where_the_light_rises_along_the_strip() {
+        // Light rising 1.8:1 towards the high-frequency end: only the paper
+        // beside the low end, where a 32nd of the strip holds under a cycle,
+        // lies within the codes the shape was read over (until session 39
+        // those stretches were left out and α was not found).
         let light = |s: f64| 0.42 * (1.0 + 0.8 * s / LEN);
+        let (_, fix) = run(&light, &|_| 1.0);
+        let b = fix.black.clone().expect("a black level");
+        assert!(b.used, "{b:?}");
+        let without = ToneFix {
+            black: None,
+            ..fix.clone()
+        };
+        let (before, after) = (offset_left(&without, 0.756), offset_left(&fix, 0.756));
+        assert!(before.abs() > 0.03, "{before}");
+        assert!(after.abs() < 0.005, "{before} → {after}; {b:?}");
+        assert!(!fix.uneven_light(), "found: no warning");
+    }
+
+    #[test]
+    fn paper_brighter_than_the_strip_everywhere_is_not_read() {
+        // Even light over the low end's periods (the shape's codes), rising
+        // 1.8:1 beyond them: the paper is above every code read.
+        let light = |s: f64| 0.42 * (1.0 + 0.8 * ((s / LEN - 0.6) / 0.4).max(0.0));
         let (_, fix) = run(&light, &|_| 1.0);
         let b = fix.black.clone().expect("read");
         assert!(!b.used && !b.offset.is_finite(), "{b:?}");
