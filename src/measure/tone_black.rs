@@ -325,6 +325,8 @@ fn stretches(law: &PhaseLaw, s0: f64, s1: f64) -> Vec<(f64, f64)> {
     let mut out = Vec::new();
     let mut a = s0;
     while a < s1 - 0.5 * step && out.len() < STRETCHES {
+        // A hair past one cycle, so that the whole-cycle test in `find` holds
+        // after the inversion's rounding.
         let one_cycle = law.s_at_phase(law.phase(a) + 1.0 + 1e-6, s0, s1);
         let b = (a + step).max(one_cycle).min(s1);
         if !(b > a) {
