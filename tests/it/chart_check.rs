@@ -60,7 +60,18 @@ fn where_the_check_says_sharp_enough_compensation_changes_the_mtf_by_at_most_0_0
                 "{print} / {src}: sharp enough to {sharp:.3} cy/px ({inside} points, largest change {worst_in:.4}); \
                  0.9 mark {mark09:.3} cy/px, beyond it {beyond_big}/{beyond} points change > 0.01"
             );
-            assert!(inside >= 1, "{print}/{src}: {inside} points");
+            // A print sharp enough only below the curve's first point has none
+            // to check (the coarse print: 0.023 cy/px, the first point's window
+            // whole since session 39).
+            let first = c
+                .points
+                .iter()
+                .map(|p| p.freq_cy_px)
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                inside >= 1 || sharp < first,
+                "{print}/{src}: {inside} points"
+            );
             total += inside;
             assert!(worst_in <= 0.01, "{print}/{src}: {worst_in}");
             assert!(
