@@ -378,6 +378,18 @@ pub(super) fn measure_strip(
     // #2 and #5: effect −57 and −34 %, the chart modulation read +24 and
     // +29 % off, claiming ±0.7 and ±0.8 %).
     let not_taken_out = tone_fix.as_ref().filter(|f| f.needed() && !f.used);
+    // Widens each point by an offset of relative scale `eps` (see
+    // `tone_unseen::widen`), MTF50's uncertainty with them where it is
+    // given; returns the chart modulation's share.
+    let mut widen_points = |eps: f64| -> f64 {
+        let share = tone_unseen::widen(&mut points, &low, &prof, &law, eps, m_chart, |alt, low| {
+            read_chart(alt, low).ok().map(|c| c.0)
+        });
+        if figures.mtf50_cy_px.is_some() {
+            figures.mtf50_err_cy_px = curve::mtf50_sigma(&points);
+        }
+        share
+    };
     let (m_chart_err, source) = if let Some(b) = black {
         let rel = b.modulation_rel_err();
         // Where the light changes along the strip, α's error bends the MTF's
@@ -385,12 +397,7 @@ pub(super) fn measure_strip(
         // carries it, as an unseen black level's scale does.
         // (Independent camera, picture styles under light 1.5–2.6:1 with the
         // black level found, 80 shots: MTF50 |z| up to 3.6 without this, 1.9 with.)
-        tone_unseen::widen(&mut points, &low, &prof, &law, rel, m_chart, |alt, low| {
-            read_chart(alt, low).ok().map(|c| c.0)
-        });
-        if figures.mtf50_cy_px.is_some() {
-            figures.mtf50_err_cy_px = curve::mtf50_sigma(&points);
-        }
+        widen_points(rel);
         (
             m_chart_err.hypot(m_chart * rel),
             format!("{source}; ± {:.4} from the black level", m_chart * rel),
@@ -398,13 +405,7 @@ pub(super) fn measure_strip(
     } else if let Some(eps) = tone_fix.as_ref().and_then(tone_unseen::scale) {
         // Unseen, it leaves the chart modulation and, where the light
         // changes, each point uncertain: said, not hidden.
-        let share = tone_unseen::widen(&mut points, &low, &prof, &law, eps, m_chart, |alt, low| {
-            read_chart(alt, low).ok().map(|c| c.0)
-        });
-        // MTF50 where it was given: its uncertainty from the widened points.
-        if figures.mtf50_cy_px.is_some() {
-            figures.mtf50_err_cy_px = curve::mtf50_sigma(&points);
-        }
+        let share = widen_points(eps);
         (
             m_chart_err.hypot(share),
             format!("{source}{}", tone_unseen::source_note(share, eps)),

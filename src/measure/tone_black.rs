@@ -457,23 +457,31 @@ mod tests {
         (mv - sxy / sxx * ml) / mv
     }
 
-    #[test]
-    fn the_black_level_is_found_where_the_light_falls_along_the_strip() {
-        // Light 1.8:1, brightest at the low-frequency end; paper at 0.75 there.
-        let light = |s: f64| 0.75 * (1.0 - 0.45 * s / LEN);
-        let (_, fix) = run(&light, &|_| 1.0);
+    /// Under `light` (brightest `light_max`) on white paper: the black level
+    /// is found and used, and takes the offset the shape alone leaves
+    /// (several per cent of the mean) to within 0.5 %, with no warning.
+    fn found_and_taken_out(light: &dyn Fn(f64) -> f64, light_max: f64) -> BlackLevel {
+        let (_, fix) = run(light, &|_| 1.0);
         let b = fix.black.clone().expect("a black level");
         assert!(b.used, "{b:?}");
         let without = ToneFix {
             black: None,
             ..fix.clone()
         };
-        let (before, after) = (offset_left(&without, 0.75), offset_left(&fix, 0.75));
-        // Through the shape alone the curve leaves an offset of several per
-        // cent of the mean; the paper takes it to within 0.5 %.
+        let (before, after) = (
+            offset_left(&without, light_max),
+            offset_left(&fix, light_max),
+        );
         assert!(before.abs() > 0.03, "{before}");
         assert!(after.abs() < 0.005, "{before} → {after}; {b:?}");
         assert!(!fix.uneven_light(), "found: no warning");
+        b
+    }
+
+    #[test]
+    fn the_black_level_is_found_where_the_light_falls_along_the_strip() {
+        // Light 1.8:1, brightest at the low-frequency end; paper at 0.75 there.
+        let b = found_and_taken_out(&|s: f64| 0.75 * (1.0 - 0.45 * s / LEN), 0.75);
         // Its error on the modulations: the offset's σ over the mean less α.
         let e = b.modulation_rel_err();
         assert!(
@@ -497,18 +505,7 @@ mod tests {
         // beside the low end, where a 32nd of the strip holds under a cycle,
         // lies within the codes the shape was read over (until session 39
         // those stretches were left out and α was not found).
-        let light = |s: f64| 0.42 * (1.0 + 0.8 * s / LEN);
-        let (_, fix) = run(&light, &|_| 1.0);
-        let b = fix.black.clone().expect("a black level");
-        assert!(b.used, "{b:?}");
-        let without = ToneFix {
-            black: None,
-            ..fix.clone()
-        };
-        let (before, after) = (offset_left(&without, 0.756), offset_left(&fix, 0.756));
-        assert!(before.abs() > 0.03, "{before}");
-        assert!(after.abs() < 0.005, "{before} → {after}; {b:?}");
-        assert!(!fix.uneven_light(), "found: no warning");
+        found_and_taken_out(&|s: f64| 0.42 * (1.0 + 0.8 * s / LEN), 0.756);
     }
 
     #[test]
