@@ -402,16 +402,23 @@ pub(super) fn measure_strip(
             m_chart_err.hypot(m_chart * rel),
             format!("{source}; ± {:.4} from the black level", m_chart * rel),
         )
-    } else if let Some(eps) = tone_fix.as_ref().and_then(tone_unseen::scale) {
-        // Unseen, it leaves the chart modulation and, where the light
-        // changes, each point uncertain: said, not hidden.
+    } else if let Some((eps, f)) = tone_fix
+        .as_ref()
+        .and_then(|f| Some((tone_unseen::scale(f)?, f)))
+    {
+        // Unseen (or a curve seen too weakly to take out), it leaves the
+        // chart modulation and, where the light changes, each point
+        // uncertain: said, not hidden.
         let share = widen_points(eps);
         (
             m_chart_err.hypot(share),
-            format!("{source}{}", tone_unseen::source_note(share, eps)),
+            format!("{source}{}", tone_unseen::source_note(share, eps, f)),
         )
     } else if let Some(f) = not_taken_out {
-        let share = m_chart * f.effect.abs();
+        // Read through the curve: the chart modulation by about its effect,
+        // and, where the light changes, each point as an offset of that
+        // scale would move it.
+        let share = widen_points(f.effect.abs());
         (
             m_chart_err.hypot(share),
             format!("{source}; ± {share:.4} from the camera's tone curve, seen but not taken out"),
