@@ -276,6 +276,7 @@ def _options(
     bin_px: float,
     margin: float,
     window_cycles: float,
+    max_across: int = 512,
 ) -> str:
     gamma: Optional[float] = None
     tone_chart = False
@@ -312,6 +313,8 @@ def _options(
         pitch_mm = float(pixel_pitch_um) / 1000.0
         if not (np.isfinite(pitch_mm) and pitch_mm > 0):
             raise ValueError(f"pixel_pitch_um {pixel_pitch_um} must be a positive number")
+    if isinstance(max_across, bool) or int(max_across) != max_across or max_across < 0:
+        raise ValueError(f"max_across {max_across} must be a whole number ≥ 0")
     if chart_index is not None and (int(chart_index) != chart_index or chart_index < 0):
         raise ValueError(f"chart_index {chart_index} must be a whole number ≥ 0")
     opts = {
@@ -331,6 +334,7 @@ def _options(
         "refine_roi": bool(refine_roi),
         "green_balance": bool(green_balance),
         "find_print_ends": not bool(keep_ends),
+        "max_across": int(max_across),
     }
     return json.dumps(opts)
 
@@ -352,6 +356,7 @@ def measure(
     bin_px: float = 0.25,
     margin: float = 0.15,
     window_cycles: float = 4.0,
+    max_across: int = 512,
     name: str = "<array>",
     threads: Optional[int] = None,
 ) -> Measurement:
@@ -377,6 +382,8 @@ def measure(
       beyond where the printed sweep stops inside the region (corners clicked
       beyond the print) are left out (``print_ends_inside_px`` in the summary).
     bin_px, margin, window_cycles: bin width (px), strip margin (fraction), estimator window (cycles).
+    max_across: most sample lines binned across a strip, as ``--max-across``: a
+      strip taller across is binned from evenly spaced rows (or columns); 0 = all.
     name: stands for an array in messages.
     threads: worker threads for this call (None = all cores); threads=1 with one
       Python thread per core measures several shots at once.
@@ -388,13 +395,13 @@ def measure(
         arr = _array(photo)
         opts = _options(roi, target, tone, arr.dtype, method, sweep, channel, pixel_pitch_um,
                         refine_roi, green_balance, keep_ends, chart_index, bin_px, margin,
-                        window_cycles)
+                        window_cycles, max_across)
         return Measurement(_native.measure_array(arr, opts, name, threads))
     if not isinstance(photo, (str, os.PathLike)):
         raise ValueError(f"photo must be a path or a numpy array, not {type(photo).__name__}")
     opts = _options(roi, target, tone, None, method, sweep, channel, pixel_pitch_um,
                     refine_roi, green_balance, keep_ends, chart_index, bin_px, margin,
-                    window_cycles)
+                    window_cycles, max_across)
     return Measurement(_native.measure_path(os.fspath(photo), opts, threads))
 
 

@@ -75,6 +75,7 @@ def measure(
     bin_px: float = ...,
     margin: float = ...,
     window_cycles: float = ...,
+    max_across: int = ...,
     name: str = ...,
     threads: Optional[int] = ...,
 ) -> Measurement: ...

@@ -85,6 +85,8 @@ def test_flat_picture_is_a_measurement_error(cli, tmp_path):
         {"pixel_pitch_um": 0},
         {"chart_index": -1},
         {"bin_px": -1.0},
+        {"max_across": -1},
+        {"max_across": 2.5},
         {"tone": "chart", "roi": [0, 0, 10, 0, 10, 10, 0, 10]},
     ],
 )

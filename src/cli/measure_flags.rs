@@ -83,6 +83,11 @@ pub struct MeasureFlags {
     /// Estimator window in cycles (advanced).
     #[arg(long, default_value_t = 4.0, value_name = "CYCLES")]
     pub window: f64,
+    /// Most sample lines binned across a strip: a strip taller across is
+    /// binned from evenly spaced rows (or columns), faster and a little
+    /// noisier; 0 = every line (advanced).
+    #[arg(long, default_value_t = sweepmtf::measure::MAX_ACROSS, value_name = "LINES")]
+    pub max_across: usize,
 }
 
 impl MeasureFlags {
@@ -120,6 +125,7 @@ impl MeasureFlags {
             distortion: self.distortion,
             estimate_distortion: !self.no_estimate_distortion,
             find_print_ends: !self.keep_ends,
+            max_across: self.max_across,
         })
     }
 }

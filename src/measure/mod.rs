@@ -57,8 +57,8 @@ pub use law::{LawKind, PhaseLaw};
 pub use lens_fit::{DistortionFound, DistortionSource};
 use options::check_options;
 pub use options::{
-    MAX_CHART_REL_ERR, MAX_LAW_RMS_CYCLES, MIN_ACROSS_PX, MeasureOptions, REFINE_SEARCH_PX,
-    SweepChoice,
+    MAX_ACROSS, MAX_CHART_REL_ERR, MAX_LAW_RMS_CYCLES, MIN_ACROSS_PX, MeasureOptions,
+    REFINE_SEARCH_PX, SweepChoice,
 };
 pub use patches::PatchResult;
 pub use region::{charts_in, rect_strip, target_homography};
@@ -443,6 +443,7 @@ fn measure_planes_lens(
         margin: opts.margin,
         end_px: 1.0,
         clip_level,
+        max_across: opts.max_across,
     };
     for (name, group) in groups {
         let plane_refs: &[PlaneRef] = group;

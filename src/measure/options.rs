@@ -75,7 +75,18 @@ pub struct MeasureOptions {
     /// the bins beyond out ([`super::sweep_end`]; default on; off keeps every
     /// bin up to the region's ends, as before session 35).
     pub find_print_ends: bool,
+    /// Most sample lines binned across a strip (rows for a sweep along the
+    /// rows, columns for one down them): a strip taller across is binned
+    /// from evenly spaced lines, every k-th (k odd); 0 bins every line.
+    pub max_across: usize,
 }
+
+/// [`MeasureOptions::max_across`]'s default. On the 24 MP speed check's
+/// 5200 × 1700 px strip (1190 rows inside its margins, so every third
+/// row): the whole measurement 110 → 97 ms (1.52× → 1.35× djpeg), the
+/// points' median `mtf_err` 0.00051 → 0.00060, MTF moved by 0.0002 RMS;
+/// strips up to 512 px across inside their margins are binned whole.
+pub const MAX_ACROSS: usize = 512;
 
 /// Quality gate: least strip width inside the margins (px) for a curve.
 pub const MIN_ACROSS_PX: f64 = 3.0;
@@ -108,6 +119,7 @@ impl Default for MeasureOptions {
             distortion: None,
             estimate_distortion: true,
             find_print_ends: true,
+            max_across: MAX_ACROSS,
         }
     }
 }

@@ -64,6 +64,7 @@ fn chart_tone(raw: &Plane, t: &Target, roi: &[Point; 4]) -> Result<ToneCurve, Fa
         margin: 0.2,
         end_px: 0.0,
         clip_level: f32::INFINITY,
+        max_across: 0,
     };
     let mut pairs = Vec::new();
     for g in &t.greys {

@@ -12,6 +12,9 @@ pub struct BinOptions {
     pub end_px: f64,
     /// Linear value at or above which a sample counts as clipped.
     pub clip_level: f32,
+    /// Most sample rows binned across a strip that sweeps along the rows
+    /// (evenly spaced; 0 = every row).
+    pub max_across: usize,
 }
 
 impl Default for BinOptions {
@@ -21,6 +24,7 @@ impl Default for BinOptions {
             margin: 0.15,
             end_px: 1.0,
             clip_level: 0.999,
+            max_across: 0,
         }
     }
 }

@@ -27,8 +27,8 @@ pub(super) fn bin_through_lens(
     lens: &Lens,
     m: [f64; 9],
     (t0, t1, s_lo, s_hi): (f64, f64, f64, f64),
-    bin: f64,
-    nbins: usize,
+    (bin, nbins): (f64, usize),
+    steps: (usize, usize),
     clip_level: f32,
 ) -> Profile {
     let outline = photo_outline(strip, t0, t1);
@@ -40,7 +40,7 @@ pub(super) fn bin_through_lens(
         s_lo,
         s_hi,
     };
-    let tiles = tiles(planes, &outline, &map, bin);
+    let tiles = tiles(planes, &outline, &map, bin, steps);
     let inv_bin = 1.0 / bin;
     let last = nbins - 1;
     let bin_of = |s: f64| ((s * inv_bin) as usize).min(last);
@@ -166,6 +166,7 @@ impl Map<'_> {
         mut f: F,
     ) {
         let mut buf = [0.0f32; TILE];
+        let mut picked = [0.0f32; TILE];
         let mut s_buf = [0.0f64; TILE];
         let meets = |t: &&Tile| {
             let k = reach.partition_point(|r| r.1 < t.s_min);
@@ -174,22 +175,32 @@ impl Map<'_> {
         for tile in tiles.iter().filter(meets) {
             let plane = planes[tile.plane];
             let (ox, oy, sx, sy) = plane.centres();
+            let cs = tile.col_step;
             for (dj, &(i0, i1)) in tile.rows.iter().enumerate() {
+                // The samples at multiples of the column step.
+                let i0 = i0.next_multiple_of(cs);
                 if i0 >= i1 {
                     continue;
                 }
-                let j = tile.first + dj;
+                let j = tile.first + dj * tile.row_step;
                 let y = oy + j as f64 * sy;
-                let row = plane.values(j, i0, &mut buf[..i1 - i0]);
+                let mut row = plane.values(j, i0, &mut buf[..i1 - i0]);
+                if cs > 1 {
+                    let n = (i1 - i0).div_ceil(cs);
+                    for q in 0..n {
+                        picked[q] = row[q * cs];
+                    }
+                    row = &picked[..n];
+                }
                 let s_run = &mut s_buf[..row.len()];
-                self.strip_row(ox + i0 as f64 * sx, sx, y, s_run);
+                self.strip_row(ox + i0 as f64 * sx, sx * cs as f64, y, s_run);
                 let (px0, py) = (
                     plane.offset.0 + i0 * plane.step.0,
                     plane.offset.1 + j * plane.step.1,
                 );
                 for (k, (&s, &v)) in s_run.iter().zip(row).enumerate() {
                     if !s.is_nan() {
-                        f(s, v, (px0 + k * plane.step.0, py));
+                        f(s, v, (px0 + k * cs * plane.step.0, py));
                     }
                 }
             }
@@ -266,11 +277,14 @@ impl<'a> Undistort<'a> {
     }
 }
 
-/// Up to TILE rows × TILE samples of one plane inside the outline, and the
-/// strip positions its samples can have.
+/// Up to TILE rows (`row_step` apart) × TILE samples of one plane inside
+/// the outline (those at multiples of `col_step`), and the strip positions
+/// its samples can have.
 struct Tile {
     plane: usize,
     first: usize,
+    row_step: usize,
+    col_step: usize,
     /// Each row's [i0, i1) sample range.
     rows: Vec<(usize, usize)>,
     s_min: f64,
@@ -282,7 +296,14 @@ struct Tile {
 /// 5 % of that spread and two bins (over 64 px, s departs from the plane
 /// through those points by far less: a lens is smooth and has no turning
 /// point inside the frame).
-fn tiles(planes: &[PlaneRef], outline: &[Point], map: &Map, bin: f64) -> Vec<Tile> {
+fn tiles(
+    planes: &[PlaneRef],
+    outline: &[Point],
+    map: &Map,
+    bin: f64,
+    (row_step, col_step): (usize, usize),
+) -> Vec<Tile> {
+    let (row_step, col_step) = (row_step.max(1), col_step.max(1));
     let ymin = outline.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min) - 1.0;
     let ymax = outline
         .iter()
@@ -294,7 +315,10 @@ fn tiles(planes: &[PlaneRef], outline: &[Point], map: &Map, bin: f64) -> Vec<Til
         let (ox, oy, sx, sy) = plane.centres();
         let j0 = ((ymin - oy) / sy).ceil().max(0.0) as usize;
         let j1 = (((ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
+        // Rows at multiples of the step (the same lattice as the plain path's).
+        let j0 = j0.next_multiple_of(row_step);
         let spans: Vec<(usize, usize)> = (j0..j1)
+            .step_by(row_step)
             .map(|j| {
                 let Some((xa, xb)) = super::row_span(outline, oy + j as f64 * sy) else {
                     return (0, 0);
@@ -305,7 +329,7 @@ fn tiles(planes: &[PlaneRef], outline: &[Point], map: &Map, bin: f64) -> Vec<Til
             })
             .collect();
         for (k, rows) in spans.chunks(TILE).enumerate() {
-            bands.push((p, j0 + k * TILE, rows.to_vec()));
+            bands.push((p, j0 + k * TILE * row_step, rows.to_vec()));
         }
     }
     bands
@@ -328,7 +352,7 @@ fn tiles(planes: &[PlaneRef], outline: &[Point], map: &Map, bin: f64) -> Vec<Til
                 let (xa, xb) = (ox + c0 as f64 * sx, ox + (c1 - 1) as f64 * sx);
                 let (ya, yb) = (
                     oy + *first as f64 * sy,
-                    oy + (first + rows.len() - 1) as f64 * sy,
+                    oy + (first + (rows.len() - 1) * row_step) as f64 * sy,
                 );
                 let (mut s_min, mut s_max) = (f64::INFINITY, f64::NEG_INFINITY);
                 for x in [xa, 0.5 * (xa + xb), xb] {
@@ -346,6 +370,8 @@ fn tiles(planes: &[PlaneRef], outline: &[Point], map: &Map, bin: f64) -> Vec<Til
                 Some(Tile {
                     plane: *p,
                     first: *first,
+                    row_step,
+                    col_step,
                     rows,
                     s_min: s_min - pad,
                     s_max: s_max + pad,

@@ -55,14 +55,22 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
         return Profile::default();
     }
     if let Some(lens) = &strip.lens {
+        // Whether the sweep runs along the rows in the photo, at its middle.
+        let (l, w) = (strip.length, strip.width);
+        let (a, b) = (
+            strip.to_photo([0.5 * l, 0.5 * w]),
+            strip.to_photo([0.5 * l + bin, 0.5 * w]),
+        );
+        let along_rows = (b[0] - a[0]).abs() >= (b[1] - a[1]).abs();
+        let step = across_step(strip, t1 - t0, planes, along_rows, opts.max_across);
         let mut prof = lens::bin_through_lens(
             planes,
             strip,
             lens,
             positive_inverse(strip, inv.m),
             (t0, t1, s_lo, s_hi),
-            bin,
-            nbins,
+            (bin, nbins),
+            if along_rows { (step, 1) } else { (1, step) },
             opts.clip_level,
         );
         prof.bin = bin;
@@ -75,8 +83,14 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
     // Scale the inverse homography so its denominator is positive over the
     // region (a homography is defined up to scale, sign included).
     let m = positive_inverse(strip, inv.m);
+    // Where the strip is taller across than `max_across` samples, every
+    // k-th sample row (a sweep along the rows) or column (along the columns).
+    let by_columns = sweeps_across_columns(&m, &quad);
+    let step = across_step(strip, t1 - t0, planes, by_columns, opts.max_across);
     let region = Region {
-        by_columns: sweeps_across_columns(&m, &quad),
+        by_columns,
+        row_step: if by_columns { step } else { 1 },
+        col_step: if by_columns { 1 } else { step },
         planes,
         m,
         ymin,
@@ -149,6 +163,30 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
     }
     acc::finish(&acc, &mut prof, wants_parity(planes), opts.clip_level);
     prof
+}
+
+/// The step that leaves at most `max_across` sample rows (`by_columns`: a
+/// sweep along the rows) or columns across a strip `across` (strip units)
+/// wide (0: all of them): odd, so that a line of samples still alternates
+/// its pixel parity.
+fn across_step(
+    strip: &Strip,
+    across: f64,
+    planes: &[PlaneRef],
+    by_columns: bool,
+    max_across: usize,
+) -> usize {
+    let lattice = planes
+        .iter()
+        .map(|p| if by_columns { p.step.1 } else { p.step.0 })
+        .max()
+        .unwrap_or(1)
+        .max(1) as f64;
+    let lines = across * strip.px_per_t(0.5 * strip.length) / lattice;
+    if max_across == 0 || !(lines > max_across as f64) {
+        return 1;
+    }
+    ((lines / max_across as f64).ceil().min(1e6) as usize) | 1
 }
 
 /// Whether a profile records its bins' pixel-parity patterns

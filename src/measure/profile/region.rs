@@ -21,6 +21,12 @@ pub(super) struct Region<'a> {
     /// Whether `s` changes faster across the columns than across the rows
     /// (then [`Region::visit_band_lines`] walks down the columns).
     pub(super) by_columns: bool,
+    /// Sample rows visited: every `row_step`th (odd, so that a line down a
+    /// column still alternates its pixel parity; 1 = all).
+    pub(super) row_step: usize,
+    /// Samples visited along a row: those at multiples of `col_step` (odd,
+    /// likewise; 1 = all).
+    pub(super) col_step: usize,
 }
 
 impl Region<'_> {
@@ -97,7 +103,7 @@ impl Region<'_> {
                 if i0 >= i1 {
                     continue;
                 }
-                let j = band.first + dj;
+                let j = band.row(dj);
                 let y = oy + j as f64 * sy;
                 let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
                 let s_of = |i: usize| {
@@ -116,6 +122,9 @@ impl Region<'_> {
                     let ia = (((xa - ox) / sx).floor() - 1.0).max(i0 as f64) as usize;
                     let ib = (((xb - ox) / sx).ceil() + 2.0).min(i1 as f64) as usize;
                     for i in ia.max(i0)..ib.min(i1) {
+                        if i % self.col_step.max(1) != 0 {
+                            continue;
+                        }
                         let s = s_of(i);
                         if bin_of(s) == b {
                             f(b, s, plane.at(i, j));
@@ -135,14 +144,19 @@ impl Region<'_> {
             let j0 = ((self.ymin - oy) / sy).ceil().max(0.0) as usize;
             let j1 =
                 (((self.ymax - oy) / sy).floor() + 1.0).clamp(0.0, plane.height as f64) as usize;
+            // Rows at multiples of the step (the same lattice whatever the region).
+            let step = self.row_step.max(1);
+            let j0 = j0.next_multiple_of(step);
             let ranges: Vec<(usize, usize)> = (j0..j1)
+                .step_by(step)
                 .map(|j| self.row_range(oy + j as f64 * sy, ox, sx, plane.width))
                 .collect();
             for (k, rows) in ranges.chunks(TILE).enumerate() {
                 if rows.iter().any(|r| r.0 < r.1) {
                     out.push(Band {
                         plane: p,
-                        first: j0 + k * TILE,
+                        first: j0 + k * TILE * step,
+                        step,
                         rows: rows.to_vec(),
                     });
                 }
@@ -217,14 +231,30 @@ impl Region<'_> {
                     if i0 >= i1 {
                         continue;
                     }
-                    let j = band.first + dj;
+                    let j = band.row(dj);
                     let y = oy + j as f64 * sy;
                     plane.prefetch(c1, j);
-                    let n = i1 - i0;
-                    plane.read_into(j, i0, &mut v_buf[..n]);
                     let (ns0, w0) = (m[1] * y + m[2], m[7] * y + m[8]);
+                    let (n, i0, cs) = if self.col_step > 1 {
+                        // Every col_step-th sample (those at multiples of it).
+                        let first = i0.next_multiple_of(self.col_step);
+                        if first >= i1 {
+                            continue;
+                        }
+                        let mut row = [0.0f32; TILE];
+                        plane.read_into(j, first, &mut row[..i1 - first]);
+                        let n = (i1 - first).div_ceil(self.col_step);
+                        for (q, v) in v_buf[..n].iter_mut().enumerate() {
+                            *v = row[q * self.col_step];
+                        }
+                        (n, first, self.col_step)
+                    } else {
+                        let n = i1 - i0;
+                        plane.read_into(j, i0, &mut v_buf[..n]);
+                        (n, i0, 1)
+                    };
                     for (k, s) in s_buf[..n].iter_mut().enumerate() {
-                        let x = ox + (i0 + k) as f64 * sx;
+                        let x = ox + (i0 + k * cs) as f64 * sx;
                         *s = (m[0] * x + ns0) / (m[6] * x + w0);
                     }
                     let start = LineStart::of(&plane, i0, j, true);
@@ -239,7 +269,7 @@ impl Region<'_> {
         let (mut ns, mut w) = ([0.0f64; TILE], [0.0f64; TILE]);
         let (mut ns_c, mut w_c) = ([0.0f64; TILE], [0.0f64; TILE]);
         for (dj, n) in ns.iter_mut().zip(&mut w).enumerate().take(nr) {
-            let y = oy + (band.first + dj) as f64 * sy;
+            let y = oy + band.row(dj) as f64 * sy;
             *n.0 = m[1] * y + m[2];
             *n.1 = m[7] * y + m[8];
         }
@@ -248,14 +278,14 @@ impl Region<'_> {
             for (dj, &(i0, i1)) in rows.iter().enumerate() {
                 let (i0, i1) = (i0.max(c0), i1.min(c1));
                 if i0 < i1 {
-                    let j = band.first + dj;
+                    let j = band.row(dj);
                     plane.prefetch(c1, j);
                     plane.read_into(j, i0, &mut tile[dj][i0 - c0..i1 - c0]);
                 }
             }
             // Whether every row holds the whole tile (then no packing).
             let full = rows.iter().all(|&(i0, i1)| i0 <= c0 && i1 >= c1);
-            for k in c0..c1 {
+            for k in (c0.next_multiple_of(self.col_step.max(1))..c1).step_by(self.col_step.max(1)) {
                 let x = ox + k as f64 * sx;
                 let (a0, a6) = (m[0] * x, m[6] * x);
                 if full {
@@ -284,7 +314,7 @@ impl Region<'_> {
                 for q in 0..n {
                     s_buf[q] = (a0 + ns_c[q]) / (a6 + w_c[q]);
                 }
-                let start = LineStart::of(&plane, k, band.first + first.min(nr), false);
+                let start = LineStart::of(&plane, k, band.row(first.min(nr)), false);
                 hand_out_line(n, &s_buf, &mut b_buf, &v_buf, inv_bin, last, start, f);
             }
         }
@@ -346,11 +376,20 @@ pub(super) trait LineSink {
 /// path's tiles).
 pub(super) const TILE: usize = 64;
 
-/// Up to TILE consecutive sample rows of one plane, with each row's [i0, i1) range.
+/// Up to TILE sample rows of one plane, `step` apart, with each row's [i0, i1) range.
 pub(super) struct Band {
     plane: usize,
     first: usize,
+    step: usize,
     rows: Vec<(usize, usize)>,
+}
+
+impl Band {
+    /// The sample row of the band's `dj`th row.
+    #[inline(always)]
+    fn row(&self, dj: usize) -> usize {
+        self.first + dj * self.step
+    }
 }
 
 /// The x-extent where the horizontal line at `y` crosses a closed polygon

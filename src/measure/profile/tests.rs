@@ -131,42 +131,49 @@ fn the_first_pass_equals_sample_by_sample_binning_in_either_walk_and_build() {
         bin: 0.25,
         nbins: 1400,
         by_columns: true,
+        row_step: 1,
+        col_step: 1,
     };
-    let mut reference = vec![BinAcc::default(); 1400];
-    let mut ref_count = [0usize; 3];
-    // Every sample centre of the image, row by row, through the region's
-    // own inside test (`Region::inside`'s arithmetic) and position
+    // Every sample centre of the image (in rows at multiples of `rs`, at
+    // multiples of `cs` along them), row by row, through the
+    // region's own inside test (`Region::inside`'s arithmetic) and position
     // (`visit_band_lines`' arithmetic).
-    let m = &region.m;
-    for j in 0..h {
-        let y = j as f64 + 0.5;
-        if y < region.ymin || y > region.ymax {
-            continue;
-        }
-        for i in 0..w {
-            let x = i as f64 + 0.5;
-            let rw = 1.0 / (m[6] * x + m[7] * y + m[8]);
-            let (si, ti) = (
-                (m[0] * x + m[1] * y + m[2]) * rw,
-                (m[3] * x + m[4] * y + m[5]) * rw,
-            );
-            if !(ti >= region.t0 && ti <= region.t1 && si >= region.s_lo && si <= region.s_hi) {
+    let reference = |rs: usize, cs: usize| {
+        let mut reference = vec![BinAcc::default(); 1400];
+        let mut ref_count = [0usize; 3];
+        let m = &region.m;
+        for j in (0..h).step_by(rs) {
+            let y = j as f64 + 0.5;
+            if y < region.ymin || y > region.ymax {
                 continue;
             }
-            let s = (m[0] * x + (m[1] * y + m[2])) / (m[6] * x + (m[7] * y + m[8]));
-            let v = lut[codes[j * w + i] as usize];
-            ref_count[0] += 1;
-            ref_count[1] += (v >= 0.999) as usize;
-            ref_count[2] += (v <= 0.0) as usize;
-            let r = &mut reference[((s * 4.0) as usize).min(1399)];
-            r.add(s, v);
-            r.add_parity(i, j);
+            for i in (0..w).step_by(cs) {
+                let x = i as f64 + 0.5;
+                let rw = 1.0 / (m[6] * x + m[7] * y + m[8]);
+                let (si, ti) = (
+                    (m[0] * x + m[1] * y + m[2]) * rw,
+                    (m[3] * x + m[4] * y + m[5]) * rw,
+                );
+                if !(ti >= region.t0 && ti <= region.t1 && si >= region.s_lo && si <= region.s_hi) {
+                    continue;
+                }
+                let s = (m[0] * x + (m[1] * y + m[2])) / (m[6] * x + (m[7] * y + m[8]));
+                let v = lut[codes[j * w + i] as usize];
+                ref_count[0] += 1;
+                ref_count[1] += (v >= 0.999) as usize;
+                ref_count[2] += (v <= 0.0) as usize;
+                let r = &mut reference[((s * 4.0) as usize).min(1399)];
+                r.add(s, v);
+                r.add_parity(i, j);
+            }
         }
-    }
-    assert!(ref_count[0] > 30_000, "{ref_count:?}");
-    let run = |by_columns: bool, avx2: bool| {
+        (reference, ref_count)
+    };
+    let run = |by_columns: bool, steps: (usize, usize), avx2: bool| {
         let piece = Region {
             by_columns,
+            row_step: steps.0,
+            col_step: steps.1,
             ..region
         };
         let mut acc = vec![BinAcc::default(); 1400];
@@ -183,27 +190,75 @@ fn the_first_pass_equals_sample_by_sample_binning_in_either_walk_and_build() {
         };
         (count, acc)
     };
-    for by_columns in [true, false] {
-        let (count, acc) = run(by_columns, false);
-        assert_eq!(count, ref_count);
-        for (a, r) in acc.iter().zip(&reference) {
-            assert_eq!((a.n, a.hi, a.lo), (r.n, r.hi, r.lo));
-            // The pixel-parity sums, a run at a time, exactly.
-            assert_eq!(a.parity, r.parity, "by columns {by_columns}");
-            for (x, y) in [
-                (a.sum, r.sum),
-                (a.sum2, r.sum2),
-                (a.ssum, r.ssum),
-                (a.ssum2, r.ssum2),
-            ] {
-                assert!((x - y).abs() <= 1e-12 * y.abs(), "{x} {y}");
+    // Every sample, every third row, every fifth column (the steps a strip
+    // taller across than `BinOptions::max_across` is binned with).
+    for steps in [(1, 1), (3, 1), (1, 5), (3, 5)] {
+        let (reference, ref_count) = reference(steps.0, steps.1);
+        assert!(ref_count[0] > 30_000 / (steps.0 * steps.1), "{ref_count:?}");
+        for by_columns in [true, false] {
+            let (count, acc) = run(by_columns, steps, false);
+            assert_eq!(count, ref_count, "steps {steps:?}");
+            for (a, r) in acc.iter().zip(&reference) {
+                assert_eq!((a.n, a.hi, a.lo), (r.n, r.hi, r.lo));
+                // The pixel-parity sums, a run at a time, exactly.
+                assert_eq!(
+                    a.parity, r.parity,
+                    "by columns {by_columns}, steps {steps:?}"
+                );
+                for (x, y) in [
+                    (a.sum, r.sum),
+                    (a.sum2, r.sum2),
+                    (a.ssum, r.ssum),
+                    (a.ssum2, r.ssum2),
+                ] {
+                    assert!((x - y).abs() <= 1e-12 * y.abs(), "{x} {y}");
+                }
+            }
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let (count2, acc2) = run(by_columns, steps, true);
+                assert_eq!(count2, count);
+                assert!(acc_bits(&acc2) == acc_bits(&acc));
             }
         }
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            let (count2, acc2) = run(by_columns, true);
-            assert_eq!(count2, count);
-            assert!(acc_bits(&acc2) == acc_bits(&acc));
+    }
+}
+
+#[test]
+fn a_strip_taller_across_than_max_across_is_binned_from_every_kth_line_across_it() {
+    // A keystoned strip sweeping along the rows and one sweeping down the
+    // columns, each ≈ 84 px across inside its margins: with at most 30
+    // lines across, every third row (along the rows) or every third
+    // column (down the columns), as the plain definition over those
+    // samples gives every bin; with no limit, every sample.
+    let (w, h) = (260, 260);
+    let mut rnd = uniform(31u64);
+    let data: Vec<f32> = (0..w * h)
+        .map(|k| {
+            let (x, y) = ((k % w) as f64, (k / w) as f64);
+            (0.5 + 0.3 * (0.002 * x * x + 0.0015 * y * y).sin() + 0.02 * (rnd() - 0.5)) as f32
+        })
+        .collect();
+    let plane = Plane::full(w, h, data);
+    let along_rows = [[10.0, 60.0], [250.0, 70.0], [248.0, 190.0], [12.0, 180.0]];
+    let down_columns = along_rows.map(|p| [p[1], p[0]]);
+    for (quad, steps) in [(along_rows, (3, 1)), (down_columns, (1, 3))] {
+        let strip = strip_for(quad, 240.0, 120.0);
+        for (max_across, steps) in [(0, (1, 1)), (30, steps)] {
+            let o = BinOptions {
+                max_across,
+                ..BinOptions::default()
+            };
+            let p = bin_plane(&plane, &strip, &o);
+            let want = brute_every(&plane, &strip, &o, steps);
+            assert_eq!(p.s.len(), want.len(), "{steps:?}");
+            assert!(p.samples > 8_000 / (steps.0 * steps.1), "{}", p.samples);
+            for k in 0..want.len() {
+                assert!((p.s[k] - want[k].0).abs() < 1e-9, "{steps:?} {k}");
+                assert!((p.y[k] - want[k].1).abs() < 1e-9, "{steps:?} {k}");
+                assert_eq!(p.count[k], want[k].2, "{steps:?} {k}");
+                assert_eq!(p.parity[k], want[k].3, "{steps:?} {k}");
+            }
         }
     }
 }
@@ -235,6 +290,17 @@ fn sparse_plane_uses_its_own_sites() {
 /// Every bin by definition, sample by sample: (mean s, robust mean,
 /// count, mean pixel-parity patterns).
 fn brute(plane: &Plane, strip: &Strip, o: &BinOptions) -> Vec<(f64, f64, f64, [f64; 3])> {
+    brute_every(plane, strip, o, (1, 1))
+}
+
+/// [`brute`] over the samples in rows at multiples of `rs` and at
+/// multiples of `cs` along them.
+fn brute_every(
+    plane: &Plane,
+    strip: &Strip,
+    o: &BinOptions,
+    (rs, cs): (usize, usize),
+) -> Vec<(f64, f64, f64, [f64; 3])> {
     let inv = strip.to_image.inverse().unwrap();
     let m = o.margin;
     let scale = [0.0, 0.5, 1.0]
@@ -244,8 +310,8 @@ fn brute(plane: &Plane, strip: &Strip, o: &BinOptions) -> Vec<(f64, f64, f64, [f
     let (bin, end) = (o.bin_px / scale, o.end_px / scale);
     let nb = (strip.length / bin).ceil() as usize;
     let mut by_bin: Vec<Vec<(f64, f64, [f64; 3])>> = vec![Vec::new(); nb];
-    for j in 0..plane.height {
-        for i in 0..plane.width {
+    for j in (0..plane.height).step_by(rs) {
+        for i in (0..plane.width).step_by(cs) {
             let x = (plane.offset.0 + i * plane.step.0) as f64 + 0.5;
             let y = (plane.offset.1 + j * plane.step.1) as f64 + 0.5;
             let [x, y] = match &strip.lens {
@@ -325,13 +391,17 @@ fn bins_through_a_lens_equal_the_plain_definition() {
             })
             .collect();
         let plane = Plane::full(w, h, data);
-        for bin_px in [0.25, 2.0] {
+        // Every sample; then (at most 25 rows across the strip's 60 inside
+        // its margins) every third row, as a taller strip is binned.
+        for (bin_px, max_across, steps) in [(0.25, 0, (1, 1)), (2.0, 0, (1, 1)), (0.25, 25, (3, 1))]
+        {
             let o = BinOptions {
                 bin_px,
+                max_across,
                 ..BinOptions::default()
             };
             let p = bin_plane(&plane, &strip, &o);
-            let want = brute(&plane, &strip, &o);
+            let want = brute_every(&plane, &strip, &o, steps);
             assert_eq!(
                 p.s.len(),
                 want.len(),
