@@ -264,6 +264,72 @@ fn a_strip_taller_across_than_max_across_is_binned_from_every_kth_line_across_it
 }
 
 #[test]
+fn stepped_binning_holds_on_random_geometry() {
+    // Strips turned any way, keystoned, partly outside the frame, tiny or
+    // long, binned with at most 2, 5 or 17 lines across: no panic, and every
+    // bin as the plain definition over the stepped lattice gives it (the
+    // step as `across_step` chooses it; the samples are the check).
+    let (w, h) = (160, 120);
+    let mut rnd = uniform(4041u64);
+    let data: Vec<f32> = (0..w * h)
+        .map(|k| (0.5 + 0.4 * ((k % w) as f64 * 0.37 + (k / w) as f64 * 0.11).sin()) as f32)
+        .collect();
+    let plane = Plane::full(w, h, data);
+    let mut stepped = 0;
+    for case in 0..300 {
+        let (cx, cy) = (w as f64 * rnd(), h as f64 * rnd());
+        let (len, wid) = (2.0 + 180.0 * rnd(), 1.0 + 80.0 * rnd());
+        let a = std::f64::consts::TAU * rnd();
+        let key = 0.5 + rnd();
+        let (c, sn) = (a.cos(), a.sin());
+        let quad = [
+            [-0.5, -0.5],
+            [0.5, -0.5 / key],
+            [0.5, 0.5 / key],
+            [-0.5, 0.5],
+        ]
+        .map(|[x, y]| {
+            let (x, y) = (x * len, y * wid);
+            [cx + c * x - sn * y, cy + sn * x + c * y]
+        });
+        let Ok(to_image) =
+            Homography::from_quads(&crate::geometry::rect_corners(0.0, 0.0, len, wid), &quad)
+        else {
+            continue;
+        };
+        let strip = Strip {
+            lens: None,
+            to_image,
+            length: len,
+            width: wid,
+        };
+        let o = BinOptions {
+            max_across: [2, 5, 17][case % 3],
+            ..BinOptions::default()
+        };
+        let p = bin_plane(&plane, &strip, &o);
+        let Some(inv) = strip.to_image.inverse() else {
+            continue;
+        };
+        let m = positive_inverse(&strip, inv.m);
+        let (t0, t1) = (o.margin * wid, (1.0 - o.margin) * wid);
+        let by_columns = sweeps_across_columns(&m, &strip.image_quad(t0, t1));
+        let planes = [PlaneRef::from(&plane)];
+        let k = across_step(&strip, t1 - t0, &planes, by_columns, o.max_across);
+        assert!(k % 2 == 1, "case {case}: step {k}");
+        stepped += (k > 1) as usize;
+        let want = brute_every(&plane, &strip, &o, if by_columns { (k, 1) } else { (1, k) });
+        assert_eq!(p.s.len(), want.len(), "case {case}, step {k}");
+        for i in 0..want.len() {
+            assert!((p.s[i] - want[i].0).abs() < 1e-9, "case {case} bin {i}");
+            assert!((p.y[i] - want[i].1).abs() < 1e-9, "case {case} bin {i}");
+            assert_eq!(p.count[i], want[i].2, "case {case} bin {i}");
+        }
+    }
+    assert!(stepped >= 100, "{stepped}");
+}
+
+#[test]
 fn sparse_plane_uses_its_own_sites() {
     // A Bayer-like plane with step 2 and offset (1, 0): site x = 2i + 1.5.
     let plane = Plane {
@@ -435,7 +501,7 @@ fn lens_binning_holds_on_random_geometry() {
         .map(|k| (0.5 + 0.4 * ((k % w) as f64 * 0.37 + (k / w) as f64 * 0.11).sin()) as f32)
         .collect();
     let plane = Plane::full(w, h, data);
-    let mut checked = 0;
+    let (mut checked, mut lens_stepped) = (0, 0);
     for case in 0..400 {
         let b = 0.12 * (2.0 * rnd() - 1.0) / 2.25;
         let model = crate::distortion::Ptlens {
@@ -482,12 +548,33 @@ fn lens_binning_holds_on_random_geometry() {
             length: len,
             width: wid,
         };
+        // Every line, then (every other case) at most 3 or 9 lines across.
         let o = BinOptions {
             bin_px: [0.25, 1.0, 2.0][case % 3],
+            max_across: [0, 0, 3, 0, 9, 0][case % 6],
             ..BinOptions::default()
         };
         let p = bin_plane(&plane, &strip, &o);
-        let want = brute(&plane, &strip, &o);
+        // The step as `bin_planes` chooses it for a lens (the samples are the check).
+        let scale = [0.0, 0.5, 1.0]
+            .iter()
+            .map(|f| 1.0 / strip.scale_at(f * strip.length).s_per_px)
+            .fold(0.0, f64::max);
+        let (a, b) = (
+            strip.to_photo([0.5 * len, 0.5 * wid]),
+            strip.to_photo([0.5 * len + o.bin_px / scale, 0.5 * wid]),
+        );
+        let along_rows = (b[0] - a[0]).abs() >= (b[1] - a[1]).abs();
+        let planes = [PlaneRef::from(&plane)];
+        let k = across_step(
+            &strip,
+            (1.0 - 2.0 * o.margin) * wid,
+            &planes,
+            along_rows,
+            o.max_across,
+        );
+        lens_stepped += (k > 1) as usize;
+        let want = brute_every(&plane, &strip, &o, if along_rows { (k, 1) } else { (1, k) });
         assert_eq!(p.s.len(), want.len(), "case {case}");
         for k in 0..want.len() {
             assert!((p.s[k] - want[k].0).abs() < 1e-9, "case {case} bin {k}");
@@ -496,7 +583,10 @@ fn lens_binning_holds_on_random_geometry() {
         }
         checked += 1;
     }
-    assert!(checked >= 40, "{checked}");
+    assert!(
+        checked >= 40 && lens_stepped >= 10,
+        "{checked} {lens_stepped}"
+    );
 }
 
 #[test]
