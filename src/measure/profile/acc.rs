@@ -70,7 +70,7 @@ fn fmin(a: f32, b: f32) -> f32 {
 
 impl BinAcc {
     /// Adds the parity patterns of samples `q .. e` of a line starting at
-    /// `start` (one pixel a sample): along the line one coordinate's sign
+    /// `start` (an odd number of pixels a sample): along the line one coordinate's sign
     /// alternates, so a run sums to its first sign when its length is odd and
     /// to 0 otherwise; the other coordinate's sign is the line's.
     #[inline(always)]

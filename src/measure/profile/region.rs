@@ -342,8 +342,9 @@ fn hand_out_line<F: LineSink>(
 }
 
 /// Where a line of samples starts in the photo and which way it runs: its
-/// first sample's pixel (x, y) and whether it runs along x (a row, one pixel
-/// a sample) or along y (a column, one pixel a sample, contiguous rows).
+/// first sample's pixel (x, y) and whether it runs along x (a row) or along
+/// y (a column); its samples are an odd number of pixels apart (one, or the
+/// region's step), so their coordinate along it alternates in parity.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct LineStart {
     pub(super) x: usize,
