@@ -132,10 +132,17 @@ pub const MEAN_SPAN: f64 = 0.02;
 /// level of relative scale `eps` leaves it.
 pub fn source_note(err: f64, eps: f64, fix: &ToneFix) -> String {
     if seen_weakly(fix) {
+        let why = if fix.significance > MIN_USE_SIGNIFICANCE {
+            format!(
+                "its effect on an MTF of 0.5 ({:+.2} %) too small to take out",
+                -100.0 * fix.effect
+            )
+        } else {
+            format!("under the {MIN_USE_SIGNIFICANCE:.0} σ it is taken out at")
+        };
         return format!(
-            "; ± {err:.4} from a camera tone curve seen at {:.1} σ, under the {MIN_USE_SIGNIFICANCE:.0} σ \
-             it is taken out at (± {:.1} % of the strip's mean: {PER_EFFECT:.0} × its effect on an \
-             MTF of 0.5, × {:.2} for its evidence)",
+            "; ± {err:.4} from a camera tone curve seen at {:.1} σ, {why} (± {:.1} % of the \
+             strip's mean: {PER_EFFECT:.0} × its effect on an MTF of 0.5, × {:.2} for its evidence)",
             fix.significance,
             100.0 * eps,
             evidence(fix.significance)
@@ -289,7 +296,13 @@ mod tests {
         // Needed but not used (it would put the values out of order): not this scale.
         assert_eq!(scale(&fix(12.0, eff, false)), None);
         assert_eq!(scale(&fix(f64::NAN, eff, false)), None);
-        assert!(source_note(0.01, 0.02, &fix(8.8, eff, false)).contains("8.8 σ"));
+        let note = source_note(0.01, 0.02, &fix(8.8, eff, false));
+        assert!(note.contains("8.8 σ, under the 10 σ"), "{note}");
+        let note = source_note(0.002, 0.002, &tiny);
+        assert!(
+            note.contains("40.0 σ, its effect") && note.contains("too small"),
+            "{note}"
+        );
     }
 
     #[test]
