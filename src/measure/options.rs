@@ -83,8 +83,9 @@ pub struct MeasureOptions {
 
 /// [`MeasureOptions::max_across`]'s default. On the 24 MP speed check's
 /// 5200 × 1700 px strip (1190 rows inside its margins, so every third
-/// row): the whole measurement 110 → 97 ms (1.52× → 1.35× djpeg), the
-/// points' median `mtf_err` 0.00051 → 0.00060, MTF moved by 0.0002 RMS;
+/// row): the whole measurement 1.52–1.56× → 1.35–1.38× djpeg (two
+/// interleaved runs), the points' median `mtf_err` 0.00051 → 0.00060, MTF
+/// moved by 0.0002 RMS;
 /// strips up to 512 px across inside their margins are binned whole.
 pub const MAX_ACROSS: usize = 512;
 
