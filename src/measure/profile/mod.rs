@@ -39,12 +39,7 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
     };
     let margin = opts.margin.clamp(0.0, 0.45);
     let (t0, t1) = (margin * strip.width, (1.0 - margin) * strip.width);
-    let max_px_per_s = [0.0, 0.5, 1.0]
-        .iter()
-        .map(|f| 1.0 / strip.scale_at(f * strip.length).s_per_px)
-        .fold(0.0, f64::max);
-    let bin = opts.bin_px / max_px_per_s;
-    let end = opts.end_px / max_px_per_s;
+    let (bin, end) = bin_and_end(strip, opts);
     let (s_lo, s_hi) = (end, strip.length - end);
     if !(bin > 0.0 && bin.is_finite() && s_hi > s_lo) {
         return Profile::default();
@@ -55,14 +50,13 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
         return Profile::default();
     }
     if let Some(lens) = &strip.lens {
-        // Whether the sweep runs along the rows in the photo, at its middle.
-        let (l, w) = (strip.length, strip.width);
-        let (a, b) = (
-            strip.to_photo([0.5 * l, 0.5 * w]),
-            strip.to_photo([0.5 * l + bin, 0.5 * w]),
+        let steps = line_steps(
+            strip,
+            t1 - t0,
+            planes,
+            lens_along_rows(strip, bin),
+            opts.max_across,
         );
-        let along_rows = (b[0] - a[0]).abs() >= (b[1] - a[1]).abs();
-        let step = across_step(strip, t1 - t0, planes, along_rows, opts.max_across);
         let mut prof = lens::bin_through_lens(
             planes,
             strip,
@@ -70,7 +64,7 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
             positive_inverse(strip, inv.m),
             (t0, t1, s_lo, s_hi),
             (bin, nbins),
-            if along_rows { (step, 1) } else { (1, step) },
+            steps,
             opts.clip_level,
         );
         prof.bin = bin;
@@ -86,11 +80,11 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
     // Where the strip is taller across than `max_across` samples, every
     // k-th sample row (a sweep along the rows) or column (along the columns).
     let by_columns = sweeps_across_columns(&m, &quad);
-    let step = across_step(strip, t1 - t0, planes, by_columns, opts.max_across);
+    let (row_step, col_step) = line_steps(strip, t1 - t0, planes, by_columns, opts.max_across);
     let region = Region {
         by_columns,
-        row_step: if by_columns { step } else { 1 },
-        col_step: if by_columns { 1 } else { step },
+        row_step,
+        col_step,
         planes,
         m,
         ymin,
@@ -165,28 +159,51 @@ pub fn bin_planes(planes: &[PlaneRef], strip: &Strip, opts: &BinOptions) -> Prof
     prof
 }
 
-/// The step that leaves at most `max_across` sample rows (`by_columns`: a
-/// sweep along the rows) or columns across a strip `across` (strip units)
-/// wide (0: all of them): odd, so that a line of samples still alternates
-/// its pixel parity.
-fn across_step(
+/// The bin width and the cut at each short end (strip units) `opts` asks
+/// for, in pixels at the strip's most magnified end.
+fn bin_and_end(strip: &Strip, opts: &BinOptions) -> (f64, f64) {
+    let max_px_per_s = [0.0, 0.5, 1.0]
+        .iter()
+        .map(|f| 1.0 / strip.scale_at(f * strip.length).s_per_px)
+        .fold(0.0, f64::max);
+    (opts.bin_px / max_px_per_s, opts.end_px / max_px_per_s)
+}
+
+/// Whether a strip under a lens sweeps along the photo's rows at its
+/// middle (a step of `bin`, strip units, along it).
+fn lens_along_rows(strip: &Strip, bin: f64) -> bool {
+    let (l, w) = (strip.length, strip.width);
+    let (a, b) = (
+        strip.to_photo([0.5 * l, 0.5 * w]),
+        strip.to_photo([0.5 * l + bin, 0.5 * w]),
+    );
+    (b[0] - a[0]).abs() >= (b[1] - a[1]).abs()
+}
+
+/// The (row, column) steps that leave at most `max_across` sample rows
+/// (`along_rows`: a sweep along the rows) or columns across a strip
+/// `across` (strip units) wide (0: all of them); the step across is odd,
+/// so that a line of samples still alternates its pixel parity.
+fn line_steps(
     strip: &Strip,
     across: f64,
     planes: &[PlaneRef],
-    by_columns: bool,
+    along_rows: bool,
     max_across: usize,
-) -> usize {
+) -> (usize, usize) {
     let lattice = planes
         .iter()
-        .map(|p| if by_columns { p.step.1 } else { p.step.0 })
+        .map(|p| if along_rows { p.step.1 } else { p.step.0 })
         .max()
         .unwrap_or(1)
         .max(1) as f64;
     let lines = across * strip.px_per_t(0.5 * strip.length) / lattice;
-    if max_across == 0 || !(lines > max_across as f64) {
-        return 1;
-    }
-    ((lines / max_across as f64).ceil().min(1e6) as usize) | 1
+    let k = if max_across == 0 || !(lines > max_across as f64) {
+        1
+    } else {
+        ((lines / max_across as f64).ceil().min(1e6) as usize) | 1
+    };
+    if along_rows { (k, 1) } else { (1, k) }
 }
 
 /// Whether a profile records its bins' pixel-parity patterns

@@ -25,6 +25,60 @@ fn strip_for(quad: [Point; 4], len: f64, wid: f64) -> Strip {
     }
 }
 
+/// Every bin of `p` as the plain definition `want` gives it: mean s and
+/// value to 1e-9, counts exactly and, with `parity`, the pixel-parity
+/// patterns exactly (`what` names the case in a failure).
+fn assert_bins(p: &Profile, want: &[(f64, f64, f64, [f64; 3])], parity: bool, what: &str) {
+    assert_eq!(p.s.len(), want.len(), "{what}");
+    for (k, w) in want.iter().enumerate() {
+        assert!((p.s[k] - w.0).abs() < 1e-9, "{what}, bin {k}");
+        assert!(
+            (p.y[k] - w.1).abs() < 1e-9,
+            "{what}, bin {k}: {} vs {}",
+            p.y[k],
+            w.1
+        );
+        assert_eq!(p.count[k], w.2, "{what}, bin {k}");
+        if parity {
+            assert_eq!(p.parity[k], w.3, "{what}, bin {k}");
+        }
+    }
+}
+
+/// The random-geometry tests' photo: a smooth pattern over `w` × `h` px.
+fn wavy_plane(w: usize, h: usize) -> Plane {
+    let data: Vec<f32> = (0..w * h)
+        .map(|k| (0.5 + 0.4 * ((k % w) as f64 * 0.37 + (k / w) as f64 * 0.11).sin()) as f32)
+        .collect();
+    Plane::full(w, h, data)
+}
+
+/// A random strip's corners in a `w` × `h` frame, and its length and width
+/// (up to 1 + `max_wid` px): centred anywhere, 2–182 px long, turned any
+/// way, one end up to 2× the other's height (six draws of `rnd`).
+fn random_quad(
+    rnd: &mut impl FnMut() -> f64,
+    (w, h): (usize, usize),
+    max_wid: f64,
+) -> ([Point; 4], f64, f64) {
+    let (cx, cy) = (w as f64 * rnd(), h as f64 * rnd());
+    let (len, wid) = (2.0 + 180.0 * rnd(), 1.0 + max_wid * rnd());
+    let a = std::f64::consts::TAU * rnd();
+    let key = 0.5 + rnd();
+    let (c, sn) = (a.cos(), a.sin());
+    let quad = [
+        [-0.5, -0.5],
+        [0.5, -0.5 / key],
+        [0.5, 0.5 / key],
+        [-0.5, 0.5],
+    ]
+    .map(|[x, y]| {
+        let (x, y) = (x * len, y * wid);
+        [cx + c * x - sn * y, cy + sn * x + c * y]
+    });
+    (quad, len, wid)
+}
+
 #[test]
 fn bins_a_linear_ramp_exactly_under_rotation() {
     // Image value = 0.001·s for a strip rotated by 30°: every bin mean must
@@ -251,14 +305,8 @@ fn a_strip_taller_across_than_max_across_is_binned_from_every_kth_line_across_it
             };
             let p = bin_plane(&plane, &strip, &o);
             let want = brute_every(&plane, &strip, &o, steps);
-            assert_eq!(p.s.len(), want.len(), "{steps:?}");
             assert!(p.samples > 8_000 / (steps.0 * steps.1), "{}", p.samples);
-            for k in 0..want.len() {
-                assert!((p.s[k] - want[k].0).abs() < 1e-9, "{steps:?} {k}");
-                assert!((p.y[k] - want[k].1).abs() < 1e-9, "{steps:?} {k}");
-                assert_eq!(p.count[k], want[k].2, "{steps:?} {k}");
-                assert_eq!(p.parity[k], want[k].3, "{steps:?} {k}");
-            }
+            assert_bins(&p, &want, true, &format!("steps {steps:?}"));
         }
     }
 }
@@ -269,29 +317,11 @@ fn stepped_binning_holds_on_random_geometry() {
     // long, binned with at most 2, 5 or 17 lines across: no panic, and every
     // bin as the plain definition over the stepped lattice gives it (the
     // step as `across_step` chooses it; the samples are the check).
-    let (w, h) = (160, 120);
     let mut rnd = uniform(4041u64);
-    let data: Vec<f32> = (0..w * h)
-        .map(|k| (0.5 + 0.4 * ((k % w) as f64 * 0.37 + (k / w) as f64 * 0.11).sin()) as f32)
-        .collect();
-    let plane = Plane::full(w, h, data);
+    let plane = wavy_plane(160, 120);
     let mut stepped = 0;
     for case in 0..300 {
-        let (cx, cy) = (w as f64 * rnd(), h as f64 * rnd());
-        let (len, wid) = (2.0 + 180.0 * rnd(), 1.0 + 80.0 * rnd());
-        let a = std::f64::consts::TAU * rnd();
-        let key = 0.5 + rnd();
-        let (c, sn) = (a.cos(), a.sin());
-        let quad = [
-            [-0.5, -0.5],
-            [0.5, -0.5 / key],
-            [0.5, 0.5 / key],
-            [-0.5, 0.5],
-        ]
-        .map(|[x, y]| {
-            let (x, y) = (x * len, y * wid);
-            [cx + c * x - sn * y, cy + sn * x + c * y]
-        });
+        let (quad, len, wid) = random_quad(&mut rnd, (160, 120), 80.0);
         let Ok(to_image) =
             Homography::from_quads(&crate::geometry::rect_corners(0.0, 0.0, len, wid), &quad)
         else {
@@ -315,16 +345,15 @@ fn stepped_binning_holds_on_random_geometry() {
         let (t0, t1) = (o.margin * wid, (1.0 - o.margin) * wid);
         let by_columns = sweeps_across_columns(&m, &strip.image_quad(t0, t1));
         let planes = [PlaneRef::from(&plane)];
-        let k = across_step(&strip, t1 - t0, &planes, by_columns, o.max_across);
-        assert!(k % 2 == 1, "case {case}: step {k}");
+        let steps = line_steps(&strip, t1 - t0, &planes, by_columns, o.max_across);
+        let k = steps.0.max(steps.1);
+        assert!(
+            k % 2 == 1 && steps.0.min(steps.1) == 1,
+            "case {case}: steps {steps:?}"
+        );
         stepped += (k > 1) as usize;
-        let want = brute_every(&plane, &strip, &o, if by_columns { (k, 1) } else { (1, k) });
-        assert_eq!(p.s.len(), want.len(), "case {case}, step {k}");
-        for i in 0..want.len() {
-            assert!((p.s[i] - want[i].0).abs() < 1e-9, "case {case} bin {i}");
-            assert!((p.y[i] - want[i].1).abs() < 1e-9, "case {case} bin {i}");
-            assert_eq!(p.count[i], want[i].2, "case {case} bin {i}");
-        }
+        let want = brute_every(&plane, &strip, &o, steps);
+        assert_bins(&p, &want, false, &format!("case {case}, steps {steps:?}"));
     }
     assert!(stepped >= 100, "{stepped}");
 }
@@ -468,24 +497,7 @@ fn bins_through_a_lens_equal_the_plain_definition() {
             };
             let p = bin_plane(&plane, &strip, &o);
             let want = brute_every(&plane, &strip, &o, steps);
-            assert_eq!(
-                p.s.len(),
-                want.len(),
-                "b {b} bin {bin_px}: {} {}",
-                p.s.len(),
-                want.len()
-            );
-            for k in 0..want.len() {
-                assert!((p.s[k] - want[k].0).abs() < 1e-9, "{b} {bin_px} {k}");
-                assert!(
-                    (p.y[k] - want[k].1).abs() < 1e-9,
-                    "{b} {bin_px} {k}: {} vs {}",
-                    p.y[k],
-                    want[k].1
-                );
-                assert_eq!(p.count[k], want[k].2, "{b} {bin_px} {k}");
-                assert_eq!(p.parity[k], want[k].3, "{b} {bin_px} {k}");
-            }
+            assert_bins(&p, &want, true, &format!("b {b} bin {bin_px}"));
         }
     }
 }
@@ -497,10 +509,7 @@ fn lens_binning_holds_on_random_geometry() {
     // no panic, and every bin as the brute force gives it.
     let (w, h) = (160, 120);
     let mut rnd = uniform(99u64);
-    let data: Vec<f32> = (0..w * h)
-        .map(|k| (0.5 + 0.4 * ((k % w) as f64 * 0.37 + (k / w) as f64 * 0.11).sin()) as f32)
-        .collect();
-    let plane = Plane::full(w, h, data);
+    let plane = wavy_plane(w, h);
     let (mut checked, mut lens_stepped) = (0, 0);
     for case in 0..400 {
         let b = 0.12 * (2.0 * rnd() - 1.0) / 2.25;
@@ -513,21 +522,7 @@ fn lens_binning_holds_on_random_geometry() {
         if lens.check().is_err() {
             continue;
         }
-        let (cx, cy) = (w as f64 * rnd(), h as f64 * rnd());
-        let (len, wid) = (2.0 + 180.0 * rnd(), 1.0 + 60.0 * rnd());
-        let a = std::f64::consts::TAU * rnd();
-        let key = 0.5 + rnd();
-        let (c, sn) = (a.cos(), a.sin());
-        let quad = [
-            [-0.5, -0.5],
-            [0.5, -0.5 / key],
-            [0.5, 0.5 / key],
-            [-0.5, 0.5],
-        ]
-        .map(|[x, y]| {
-            let (x, y) = (x * len, y * wid);
-            [cx + c * x - sn * y, cy + sn * x + c * y]
-        });
+        let (quad, len, wid) = random_quad(&mut rnd, (w, h), 60.0);
         // As a measurement makes it: corners clicked inside the photo,
         // undistorted, the strip's edges then bowing between them.
         if quad
@@ -555,32 +550,19 @@ fn lens_binning_holds_on_random_geometry() {
             ..BinOptions::default()
         };
         let p = bin_plane(&plane, &strip, &o);
-        // The step as `bin_planes` chooses it for a lens (the samples are the check).
-        let scale = [0.0, 0.5, 1.0]
-            .iter()
-            .map(|f| 1.0 / strip.scale_at(f * strip.length).s_per_px)
-            .fold(0.0, f64::max);
-        let (a, b) = (
-            strip.to_photo([0.5 * len, 0.5 * wid]),
-            strip.to_photo([0.5 * len + o.bin_px / scale, 0.5 * wid]),
-        );
-        let along_rows = (b[0] - a[0]).abs() >= (b[1] - a[1]).abs();
+        // The steps as `bin_planes` chooses them for a lens (the samples are the check).
+        let (bin, _) = bin_and_end(&strip, &o);
         let planes = [PlaneRef::from(&plane)];
-        let k = across_step(
+        let steps = line_steps(
             &strip,
             (1.0 - 2.0 * o.margin) * wid,
             &planes,
-            along_rows,
+            lens_along_rows(&strip, bin),
             o.max_across,
         );
-        lens_stepped += (k > 1) as usize;
-        let want = brute_every(&plane, &strip, &o, if along_rows { (k, 1) } else { (1, k) });
-        assert_eq!(p.s.len(), want.len(), "case {case}");
-        for k in 0..want.len() {
-            assert!((p.s[k] - want[k].0).abs() < 1e-9, "case {case} bin {k}");
-            assert!((p.y[k] - want[k].1).abs() < 1e-9, "case {case} bin {k}");
-            assert_eq!(p.count[k], want[k].2, "case {case} bin {k}");
-        }
+        lens_stepped += (steps != (1, 1)) as usize;
+        let want = brute_every(&plane, &strip, &o, steps);
+        assert_bins(&p, &want, false, &format!("case {case}"));
         checked += 1;
     }
     assert!(
@@ -638,16 +620,6 @@ fn robust_bins_case(down: bool) {
         };
         let p = bin_plane(&plane, &strip, &o);
         let want = brute(&plane, &strip, &o);
-        assert_eq!(p.s.len(), want.len(), "bin {bin_px}");
-        for k in 0..want.len() {
-            assert!((p.s[k] - want[k].0).abs() < 1e-9, "{bin_px} {k}");
-            assert!(
-                (p.y[k] - want[k].1).abs() < 1e-9,
-                "{bin_px} {k}: {} vs {}",
-                p.y[k],
-                want[k].1
-            );
-            assert_eq!(p.count[k], want[k].2, "{bin_px} {k}");
-        }
+        assert_bins(&p, &want, false, &format!("bin {bin_px}"));
     }
 }
