@@ -371,7 +371,7 @@ pub(super) fn measure_strip(
     let black = tone_fix
         .as_ref()
         .and_then(|f| f.black.as_ref())
-        .filter(|b| b.used);
+        .filter(|b| b.claims());
     // A camera tone curve seen clearly but not taken out (it would put the
     // values out of order): the modulations are read through it, by about
     // its effect on an MTF of 0.5 (the independent camera's `camera` seed 45

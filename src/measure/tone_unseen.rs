@@ -33,7 +33,7 @@ pub const PER_EFFECT: f64 = 4.0;
 /// found, or, times its [`evidence`], where a curve was seen
 /// ([`seen_weakly`]) but not taken out; None otherwise.
 pub fn scale(fix: &ToneFix) -> Option<f64> {
-    let weight = if fix.used && !fix.black.as_ref().is_some_and(|b| b.used) {
+    let weight = if fix.used && !fix.black.as_ref().is_some_and(|b| b.claims()) {
         1.0
     } else if seen_weakly(fix) {
         evidence(fix.significance)

@@ -155,6 +155,12 @@ fn a_tone_fit_pass_that_would_disorder_the_values_is_left_out() {
     let c = &s.m.curves[0];
     let fix = c.tone_fix.as_ref().expect("a tone fit");
     assert!(fix.used && fix.passes.len() == 2, "{fix:?}");
+    // Since session 41 four stretches of paper give a line: straight, but
+    // its α (+0.4 % of the mean) lies within what the bands' disagreement
+    // moves it by, so it is taken out without the claims resting on it
+    // (on α's own error the chart modulation, 18 % off, claimed ±1.6 %).
+    let black = fix.black.as_ref().expect("read");
+    assert!(black.used && !black.claims(), "{black:?}");
     let f50 = c.figures.mtf50_cy_px.unwrap();
     let e50_claim = c.figures.mtf50_err_cy_px.unwrap() / f50;
     assert!(
@@ -188,6 +194,61 @@ fn a_picture_styles_black_level_is_read_beside_a_dim_low_end() {
         s.rms,
         s.e50
     );
+}
+
+/// Everything at once under a picture style, light 1.7:1 (seed 55 `camera`
+/// shot 3): only four stretches of paper lie within the codes the tone's
+/// shape was read over. Until session 41 a line needed five: the black level
+/// was not found, RMS 0.0361, MTF50 −1.6 % and the chart modulation +18 %
+/// (claimed ±42 %). Now four give it, well beyond what their scatter and the
+/// bands' disagreement move it by, and the claims rest on its error (the
+/// line's bend carried to zero light): RMS ≤ 0.01, MTF50 within 1 % and
+/// both within their claims.
+#[test]
+fn four_stretches_of_paper_give_a_picture_styles_black_level() {
+    let s = scored("camera_s55_3", "exact");
+    let c = &s.m.curves[0];
+    let black = c.tone_fix.as_ref().and_then(|f| f.black.as_ref());
+    assert!(
+        black.is_some_and(|b| b.claims() && b.stretches == 4),
+        "{black:?}"
+    );
+    let f50 = c.figures.mtf50_cy_px.unwrap();
+    let e50_claim = c.figures.mtf50_err_cy_px.unwrap() / f50;
+    assert!(
+        s.rms <= 0.01 && s.e50.abs() <= 0.01 && s.e50.abs() <= 2.0 * e50_claim,
+        "RMS {} MTF50 {} ± {e50_claim}",
+        s.rms,
+        s.e50
+    );
+    let (got, err) = (c.chart_modulation, c.chart_modulation_err);
+    assert!(
+        (got - 0.8).abs() <= 2.0 * err && err < 0.04,
+        "{got} ± {err}"
+    );
+}
+
+/// A picture style under light 1.8:1 (seed 55 `tonelight` shot 7): four
+/// stretches of paper give α = −9 % of the mean, within 3 times what their
+/// scatter moves it by. Until session 41 it was not found: RMS 0.0316,
+/// MTF50 −5.0 %. Taken out, RMS ≤ 0.012 and MTF50 within 2 %, while the
+/// claims stay those of an unseen black level (and cover the error).
+#[test]
+fn a_black_level_too_near_zero_to_vouch_for_is_still_taken_out() {
+    let s = scored("tonelight_s55_7", "exact");
+    let c = &s.m.curves[0];
+    let black = c.tone_fix.as_ref().and_then(|f| f.black.as_ref());
+    assert!(black.is_some_and(|b| b.used && !b.claims()), "{black:?}");
+    let f50 = c.figures.mtf50_cy_px.unwrap();
+    let e50_claim = c.figures.mtf50_err_cy_px.unwrap() / f50;
+    assert!(
+        s.rms <= 0.012 && s.e50.abs() <= 0.02 && s.e50.abs() <= e50_claim,
+        "RMS {} MTF50 {} ± {e50_claim}",
+        s.rms,
+        s.e50
+    );
+    let (got, err) = (c.chart_modulation, c.chart_modulation_err);
+    assert!((got - 0.8).abs() <= err, "{got} ± {err}");
 }
 
 /// A picture style (tanh S-curve on the code) with the camera's sharpening

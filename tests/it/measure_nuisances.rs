@@ -241,9 +241,11 @@ fn a_picture_style_under_uneven_light_takes_its_black_level_from_the_paper() {
         );
         // Unlike under even light, the chart modulation is found too.
         assert_bars(&format!("v{variant}"), rms, e50, cm, 0.006);
-        // Its uncertainty carries the black level's, and covers the error.
+        // Its uncertainty carries the black level's, and covers the error
+        // (since session 41 α's error is the line's departure carried to
+        // zero light, not that over √stretches: 1.2 % here, from 0.4 %).
         assert!(
-            (cm - 0.8).abs() <= 3.0 * cm_err && cm_err < 0.01,
+            (cm - 0.8).abs() <= 3.0 * cm_err && cm_err < 0.015,
             "v{variant}: chart modulation {cm:.4} ± {cm_err:.4}"
         );
         assert!(

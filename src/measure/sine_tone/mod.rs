@@ -172,7 +172,7 @@ impl ToneFix {
     pub fn uneven_light(&self) -> bool {
         self.used
             && self.light_ratio > MAX_EVEN_LIGHT
-            && !self.black.as_ref().is_some_and(|b| b.used)
+            && !self.black.as_ref().is_some_and(|b| b.claims())
     }
 
     /// The warning for [`Self::uneven_light`].
@@ -180,7 +180,7 @@ impl ToneFix {
         format!(
             "the light changes {:.2}:1 along the strip, and with a camera tone curve taken out \
              the MTF's shape then depends on the curve's black level, which a sine's shape does \
-             not show and the paper beside the strip did not give (simulated picture styles: \
+             not show and the paper beside the strip did not give clearly (simulated picture styles: \
              light 1.5–2.1:1, MTF50 off by up to ±7 %; 1.03–1.11:1, ±1.1 %; each point's \
              uncertainty carries it, see the chart modulation's); light the chart \
              evenly (or brightest at the strip's low-frequency end, on plain paper), or give \
