@@ -23,10 +23,14 @@
 //! in a band shows as a disagreement or a poor line). Paper brighter than
 //! the codes the strip's shape was read over is left out (the correction is
 //! not known there): where the light is strongest away from the strip's
-//! low-frequency end, too little paper is left and α is not found. Used only where the light changes enough
-//! ([`MIN_LIGHT_SPREAD`]), the line holds ([`MAX_RESIDUAL`]), α is
-//! significant ([`MIN_SIGNIFICANCE`]) and large enough to matter
-//! ([`MIN_EFFECT`]); then α is taken from the strip's values.
+//! low-frequency end, too little paper is left and α is not found. Used
+//! only where the light changes enough ([`MIN_LIGHT_SPREAD`]), the line
+//! holds ([`MAX_RESIDUAL`]) through at least [`MIN_STRETCHES`] stretches, α
+//! is large enough to matter ([`MIN_EFFECT`]) and either significant
+//! ([`MIN_SIGNIFICANCE`]) or known better than an unseen black level would
+//! be claimed; then α is taken from the strip's values, and the claims rest
+//! on its error (the line's bend carried to zero light) only where it is
+//! significant ([`BlackLevel::claims`]).
 
 use super::PhaseLaw;
 use super::profile::{Profile, Strip};
@@ -105,7 +109,8 @@ pub struct BlackLevel {
 
 impl BlackLevel {
     /// Whether it is taken out and the modulations' uncertainties rest on
-    /// its own error. A used α nearer zero than [`MIN_SIGNIFICANCE`] σ is
+    /// its own error. A used α nearer zero than [`MIN_SIGNIFICANCE`] times
+    /// what the stretches' scatter and the bands' disagreement move it by is
     /// taken out (an estimate beats none: below) but leaves each modulation
     /// the claim of an unseen black level: it cannot be told from a
     /// correction that is wrong at the paper's codes. (Independent camera,
@@ -222,9 +227,10 @@ fn line(pts: &[(f64, f64)]) -> Option<Line> {
         // and a bend does not average out over the stretches. So α's error
         // is the departure carried to zero light by the line's lever: the
         // least-squares error times √k, and times Student's t for the few
-        // residuals that tell the bend's size. (Seed 52 #0, #7, #9 noise-free:
-        // the chart modulation read 1.7, 4.6 and 8.5 % off against claims of
-        // 0.8, 1.7 and 4.5 % with the least-squares error alone.)
+        // residuals that tell the bend's size. (`tonelight` seed 52 #0, #7, #9
+        // noise-free: the chart modulation read 1.7, 4.6 and 8.5 % off against
+        // claims of 0.8, 1.7 and 4.5 % with the least-squares error alone;
+        // now 2.0 and 4.3 %, and #9's α is too near zero to claim on.)
         sigma: scatter * k.sqrt(),
         c1,
         rms: (rss / k).sqrt(),
