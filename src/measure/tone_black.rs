@@ -65,7 +65,7 @@ pub const MAX_BAND_GAP: f64 = 0.15;
 /// many times what the stretches' scatter (least squares) and the two bands'
 /// disagreement would move it by. Nearer, it is used only where its error
 /// on the modulations is smaller than the claim an unseen black level gives
-/// them ([`super::tone_unseen::scale`]; a black level left unseen is not 0,
+/// them ([`super::tone_unseen::full_scale`]; a black level left unseen is not 0,
 /// it is unknown), and the claims stay those ([`BlackLevel::claims`]).
 pub const MIN_SIGNIFICANCE: f64 = 3.0;
 /// α is used only where it is at least this fraction of the strip's mean value.
@@ -358,8 +358,7 @@ pub fn find(
     // (the bend) on every modulation, against what leaving it unseen claims.
     let significant = all.alpha.abs() > MIN_SIGNIFICANCE * all.scatter.hypot(band_spread);
     let err = all.sigma.hypot(band_spread);
-    let better_than_unseen =
-        err / (strip_mean - all.alpha) < super::tone_unseen::PER_EFFECT * fix.effect.abs();
+    let better_than_unseen = err / (strip_mean - all.alpha) < super::tone_unseen::full_scale(fix);
     let why_not = if !(spread >= MIN_LIGHT_SPREAD) {
         "the light changes too little along the strip to tell it"
     } else if !(residual <= MAX_RESIDUAL) || !(0.05..0.95).contains(&all.c1) {

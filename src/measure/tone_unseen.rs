@@ -28,7 +28,13 @@ use super::sine_tone::{MIN_SIGNIFICANCE, MIN_USE_SIGNIFICANCE, ToneFix};
 /// black) per unit of the correction's effect on an MTF of 0.5.
 pub const PER_EFFECT: f64 = 4.0;
 
-/// The relative scale of an unseen black level, `PER_EFFECT·|effect|`
+/// The relative scale an unseen black level of a used correction is claimed
+/// at, `PER_EFFECT·|effect|` (dimensionless).
+pub fn full_scale(fix: &ToneFix) -> f64 {
+    PER_EFFECT * fix.effect.abs()
+}
+
+/// The relative scale of an unseen black level, [`full_scale`]
 /// (dimensionless): where a correction is used and its black level was not
 /// found, or, times its [`evidence`], where a curve was seen
 /// ([`seen_weakly`]) but not taken out; None otherwise.
@@ -40,7 +46,7 @@ pub fn scale(fix: &ToneFix) -> Option<f64> {
     } else {
         0.0
     };
-    Some(weight * PER_EFFECT * fix.effect.abs()).filter(|e| e.is_finite() && *e > 0.0)
+    Some(weight * full_scale(fix)).filter(|e| e.is_finite() && *e > 0.0)
 }
 
 /// How far a curve seen at `significance` σ (Wald) is taken as real, 0–1:
