@@ -71,7 +71,7 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
                     None => v,
                 }
             }
-            (None, _) => "MTF50 not reached".to_string(),
+            (None, _) => not_reached(c),
         };
         // With a sharpening peak, MTF50P (half the peak) beside MTF50.
         let f50p = match (c.figures.sharpening_peak, c.figures.peak_mtf) {
@@ -111,6 +111,18 @@ pub fn summary_line(m: &Measurement, csv_path: &Path) -> String {
         m.method.name(),
         csv_path.display()
     )
+}
+
+/// "MTF50 not reached", with where the curve ends when it ends above 0.5
+/// (the print's reach, or a region cut short, rather than a blur too weak to read).
+fn not_reached(c: &sweepmtf::measure::Curve) -> String {
+    match c.points.iter().rev().find(|p| !p.aliased) {
+        Some(p) if p.mtf > 0.5 => format!(
+            "MTF50 not reached (MTF {:.3} at the curve's end, {:.3} cy/px)",
+            p.mtf, p.freq_cy_px
+        ),
+        _ => "MTF50 not reached".to_string(),
+    }
 }
 
 /// "colour moiré: R−B spread max 0.214 at 0.262 cy/px, onset 0.231 cy/px" (the first sweep's).

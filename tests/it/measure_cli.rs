@@ -241,3 +241,37 @@ fn a_failed_run_keeps_earlier_results() {
     assert_eq!(std::fs::read(out.join("sweep.mtf.csv")).unwrap(), before);
     assert_eq!(files_in(&out).len(), 4);
 }
+
+/// A print that stops above MTF 0.5 has no MTF50; the line says where the
+/// curve ends and how high, so that a user can tell the print's reach from a
+/// failure (the shot's Gaussian blur, σ 0.7 px, reads 0.68 at 0.2 cy/px).
+#[test]
+fn a_print_that_ends_above_half_says_where_the_curve_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = shot(0.45, 0.8);
+    s.law.c2 = (0.2f64 / 0.006).ln() / s.length;
+    let photo = dir.path().join("short.png");
+    std::fs::write(&photo, s.encode(3)).unwrap();
+    let out = dir.path().join("out");
+    let a = measure(&photo, &out, &["--roi", &roi_arg(s.quad)]).success();
+    let stdout = String::from_utf8_lossy(&a.get_output().stdout).into_owned();
+    let csv = std::fs::read_to_string(out.join("short.mtf.csv")).unwrap();
+    let last: Vec<f64> = csv
+        .lines()
+        .filter(|l| l.ends_with("false"))
+        .last()
+        .unwrap()
+        .split(',')
+        .take(2)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let (f, mtf) = (last[0], last[1]);
+    let truth = (-2.0 * std::f64::consts::PI.powi(2) * 0.49 * f * f).exp();
+    assert!(f > 0.15 && f <= 0.2 && (mtf - truth).abs() < 0.02, "{f} {mtf} vs {truth}");
+    assert!(
+        stdout.contains(&format!(
+            "MTF50 not reached (MTF {mtf:.3} at the curve's end, {f:.3} cy/px)"
+        )),
+        "{stdout}"
+    );
+}
