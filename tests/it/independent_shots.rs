@@ -167,11 +167,15 @@ fn a_tone_fit_pass_that_would_disorder_the_values_is_left_out() {
     // its α (+0.4 % of the mean) lies within what the bands' disagreement
     // moves it by, so it is taken out without the claims resting on it
     // (on α's own error the chart modulation, 18 % off, claimed ±1.6 %).
+    // Since session 42 six are read (their mean codes tested): the line
+    // bends, α +6 % ± 7 % of the mean is still taken out without the claims
+    // resting on it, and MTF50 moves from −1.2 % to −3.9 %, its claim
+    // ±26 % (the price of the rule that gains on 160 other shots).
     let black = fix.black.as_ref().expect("read");
     assert!(black.used && !black.claims(), "{black:?}");
     let e50_claim = s.e50_claim;
     assert!(
-        s.e50.abs() <= 0.02 && s.e50.abs() <= 2.0 * e50_claim,
+        s.e50.abs() <= 0.04 && s.e50.abs() <= 2.0 * e50_claim,
         "MTF50 {} ± {e50_claim}",
         s.e50
     );
@@ -203,20 +207,21 @@ fn a_picture_styles_black_level_is_read_beside_a_dim_low_end() {
 }
 
 /// Everything at once under a picture style, light 1.7:1 (seed 55 `camera`
-/// shot 3): only four stretches of paper lie within the codes the tone's
-/// shape was read over. Until session 41 a line needed five: the black level
-/// was not found, RMS 0.0361, MTF50 −1.6 % and the chart modulation +18 %
-/// (claimed ±42 %). Now four give it, well beyond what their scatter and the
-/// bands' disagreement move it by, and the claims rest on its error (the
-/// line's bend carried to zero light): RMS ≤ 0.01, MTF50 within 1 % and
-/// both within their claims.
+/// shot 3). Until session 41 a line needed five stretches of paper within the
+/// codes the tone's shape was read over, and only four were read: the black
+/// level was not found, RMS 0.0361, MTF50 −1.6 % and the chart modulation
+/// +18 % (claimed ±42 %). Session 41 took four; since session 42 a stretch's
+/// paper is tested by its mean code, not by its noisiest bin, and seven are
+/// read. α lies well beyond what their scatter and the bands' disagreement
+/// move it by, and the claims rest on its error (the line's bend carried to
+/// zero light): RMS ≤ 0.01, MTF50 within 1 % and both within their claims.
 #[test]
-fn four_stretches_of_paper_give_a_picture_styles_black_level() {
+fn the_paper_within_the_codes_read_gives_a_picture_styles_black_level() {
     let s = scored("camera_s55_3", "exact");
     let c = &s.m.curves[0];
     let black = c.tone_fix.as_ref().and_then(|f| f.black.as_ref());
     assert!(
-        black.is_some_and(|b| b.claims() && b.stretches == 4),
+        black.is_some_and(|b| b.claims() && b.stretches >= 4),
         "{black:?}"
     );
     let e50_claim = s.e50_claim;
@@ -233,20 +238,51 @@ fn four_stretches_of_paper_give_a_picture_styles_black_level() {
     );
 }
 
-/// A picture style under light 1.8:1 (seed 55 `tonelight` shot 7): four
-/// stretches of paper give α = −9 % of the mean, within 3 times what their
-/// scatter moves it by. Until session 41 it was not found: RMS 0.0316,
-/// MTF50 −5.0 %. Taken out, RMS ≤ 0.012 and MTF50 within 2 %, while the
-/// claims stay those of an unseen black level (and cover the error).
+/// A picture style under light 1.8:1 (seed 55 `tonelight` shot 7). Until
+/// session 41 its black level was not found: RMS 0.0316, MTF50 −5.0 %.
+/// Session 41 read four stretches of paper, α −9 % of the mean but within
+/// 3 times what their scatter moves it by: taken out, the claims those of an
+/// unseen one. Since session 42 the stretches' mean codes are tested and
+/// five are read: α −9 % is significant and the claims rest on it. RMS
+/// ≤ 0.012, MTF50 within 2 % and its claim, the chart modulation (+4.5 %,
+/// claimed ±3.8 %) within twice its.
+#[test]
+fn a_picture_styles_black_level_from_five_stretches_is_claimed_on() {
+    let s = scored("tonelight_s55_7", "exact");
+    let c = &s.m.curves[0];
+    let black = c.tone_fix.as_ref().and_then(|f| f.black.as_ref());
+    assert!(
+        black.is_some_and(|b| b.claims() && b.stretches == 5),
+        "{black:?}"
+    );
+    let e50_claim = s.e50_claim;
+    assert!(
+        s.rms <= 0.012 && s.e50.abs() <= 0.02 && s.e50.abs() <= e50_claim,
+        "RMS {} MTF50 {} ± {e50_claim}",
+        s.rms,
+        s.e50
+    );
+    let (got, err) = (c.chart_modulation, c.chart_modulation_err);
+    assert!((got - 0.8).abs() <= 2.0 * err, "{got} ± {err}");
+}
+
+/// A picture style under light 1.5:1 (seed 55 `tonelight` shot 6). Until
+/// session 42 the noisiest bins of its bands left three stretches of paper,
+/// too few for a line: the black level was not found, RMS 0.0139, MTF50
+/// −2.3 %. Tested by their mean codes, four give α = −4.3 % of the mean,
+/// within 3 times what their scatter and the bands' disagreement move it by.
+/// It is taken out (its error is under the claim an unseen black level
+/// gives) while the claims stay those of an unseen one: RMS ≤ 0.006, MTF50
+/// within 1 % and its claim, the chart modulation within its.
 #[test]
 fn a_black_level_too_near_zero_to_vouch_for_is_still_taken_out() {
-    let s = scored("tonelight_s55_7", "exact");
+    let s = scored("tonelight_s55_6", "exact");
     let c = &s.m.curves[0];
     let black = c.tone_fix.as_ref().and_then(|f| f.black.as_ref());
     assert!(black.is_some_and(|b| b.used && !b.claims()), "{black:?}");
     let e50_claim = s.e50_claim;
     assert!(
-        s.rms <= 0.012 && s.e50.abs() <= 0.02 && s.e50.abs() <= e50_claim,
+        s.rms <= 0.006 && s.e50.abs() <= 0.01 && s.e50.abs() <= e50_claim,
         "RMS {} MTF50 {} ± {e50_claim}",
         s.rms,
         s.e50

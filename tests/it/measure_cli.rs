@@ -267,7 +267,10 @@ fn a_print_that_ends_above_half_says_where_the_curve_ends() {
         .collect();
     let (f, mtf) = (last[0], last[1]);
     let truth = (-2.0 * std::f64::consts::PI.powi(2) * 0.49 * f * f).exp();
-    assert!(f > 0.15 && f <= 0.2 && (mtf - truth).abs() < 0.02, "{f} {mtf} vs {truth}");
+    assert!(
+        f > 0.15 && f <= 0.2 && (mtf - truth).abs() < 0.02,
+        "{f} {mtf} vs {truth}"
+    );
     assert!(
         stdout.contains(&format!(
             "MTF50 not reached (MTF {mtf:.3} at the curve's end, {f:.3} cy/px)"
