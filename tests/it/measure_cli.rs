@@ -258,8 +258,7 @@ fn a_print_that_ends_above_half_says_where_the_curve_ends() {
     let csv = std::fs::read_to_string(out.join("short.mtf.csv")).unwrap();
     let last: Vec<f64> = csv
         .lines()
-        .filter(|l| l.ends_with("false"))
-        .last()
+        .rfind(|l| l.ends_with("false"))
         .unwrap()
         .split(',')
         .take(2)
