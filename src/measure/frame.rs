@@ -371,6 +371,11 @@ fn measure_coded(
         super::strip::Coding {
             block_ripple: coarse_jpeg_quality(dec).is_some(),
             tone: strip_may_correct(opts, tone).then_some(tone),
+            jpeg_luma: dec
+                .jpeg_luma_quant
+                .as_deref()
+                .filter(|_| dec.bits() == 8)
+                .map(|t| (t, tone)),
         },
     )
 }

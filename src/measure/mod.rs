@@ -42,6 +42,7 @@ pub mod tone_unseen;
 mod block_ripple;
 mod frame;
 mod frequency;
+mod jpeg_deadzone;
 mod normalise;
 mod options;
 mod preview;

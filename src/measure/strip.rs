@@ -13,8 +13,8 @@ use super::frequency::{
 use super::profile::{BinOptions, Strip, bin_planes};
 use super::{Curve, Failure, LawKind, MeasureOptions, MtfPoint, PhaseLaw, SweepChoice};
 use super::{
-    block_ripple, curve, law_guess, normalise, sine_tone, surround_leak, sweep_end, tone_black,
-    tone_unseen,
+    block_ripple, curve, jpeg_deadzone, law_guess, normalise, sine_tone, surround_leak, sweep_end,
+    tone_black, tone_unseen,
 };
 use crate::geometry::Point;
 use crate::photo::PlaneRef;
@@ -32,6 +32,26 @@ pub(super) struct Coding<'a> {
     /// The tone the planes were decoded with, where a camera's own tone
     /// curve on top of it may be found from the strip's shape and taken out.
     pub tone: Option<&'a Tone>,
+    /// An 8-bit JPEG's luma quantisation table (natural order, DCT units)
+    /// and the tone its codes were decoded with: the quantiser's error on
+    /// weak sines joins each point's uncertainty ([`jpeg_deadzone`]).
+    pub jpeg_luma: Option<(&'a [u16; 64], &'a Tone)>,
+}
+
+/// A value of the strip's planes (linear light through the decode's tone)
+/// as the strip reads it: through the camera tone curve and black level
+/// found from it, where they are taken out.
+fn fixed_value(tone_fix: Option<&sine_tone::ToneFix>, v: f64) -> f64 {
+    match tone_fix.filter(|f| f.used) {
+        Some(f) => {
+            f.linear(v)
+                - f.black
+                    .as_ref()
+                    .filter(|b| b.used)
+                    .map_or(0.0, |b| b.offset)
+        }
+        None => v,
+    }
 }
 
 /// Measures one strip of one plane; without a target law, `seed` (another
@@ -305,16 +325,7 @@ pub(super) fn measure_strip(
     // The light the lens's diffraction tail carries in from the surround:
     // an offset on the strip's values, taken out of every modulation.
     if slope_rel < 0.0 {
-        let to_linear = |v: f64| match tone_fix.as_ref().filter(|f| f.used) {
-            Some(f) => {
-                f.linear(v)
-                    - f.black
-                        .as_ref()
-                        .filter(|b| b.used)
-                        .map_or(0.0, |b| b.offset)
-            }
-            None => v,
-        };
+        let to_linear = |v: f64| fixed_value(tone_fix.as_ref(), v);
         let mean = prof.y.iter().sum::<f64>() / prof.y.len().max(1) as f64;
         let taken = surround_leak::Surround::read(planes, strip).and_then(|sur| {
             let leak_at = |s: f64| sur.leak_rel(slope_rel, strip, s, opts.margin, to_linear, mean);
@@ -335,6 +346,17 @@ pub(super) fn measure_strip(
     // low end, so the lowest points stay independent (and unbent by the smoothing).
     if coding.block_ripple {
         block_ripple::smooth(&mut points, block_ripple::RIPPLE_RMS_MTF * m_chart);
+    }
+    if let Some((table, tone)) = coding.jpeg_luma {
+        let value_of_code = |c: f64| fixed_value(tone_fix.as_ref(), tone.apply(c));
+        jpeg_deadzone::widen(&mut points, table, |p| {
+            let mean = jpeg_deadzone::local_mean(&prof, p.s, 1.0 / p.freq_chart)?;
+            Some(jpeg_deadzone::PointSine {
+                freq_cy_px: p.freq_cy_px,
+                angle_rad: strip.scale_at(p.s).angle_rad,
+                codes_per_modulation: mean * jpeg_deadzone::codes_per_value(value_of_code, mean)?,
+            })
+        });
     }
     normalise::normalise(&mut points, m_chart, m_chart_err);
     let mut figures = curve::figures(&points);

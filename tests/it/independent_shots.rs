@@ -322,3 +322,38 @@ fn a_picture_style_seen_too_weakly_to_take_out_widens_the_chart_modulations_clai
         s.e50
     );
 }
+
+/// f/16 on q75 without sensor noise (`jpeg75` seed 57 #9, turned 2.9°):
+/// from ≈ 0.38 cy/px the sine is ≈ 2 codes, and q75's luma steps (20–31
+/// there) round its DCT coefficients away in every block; the curve reads
+/// 0 where the lens passes up to 0.02. Until session 43 each point there
+/// claimed ±0.0004–0.002 (|z| up to 23); the quantiser's dead zone now
+/// joins each point's uncertainty (`jpeg_deadzone`): every point's error
+/// within 2.5 of its claims, and the claims grow only where the sine nears it.
+#[test]
+fn a_sine_the_jpeg_quantiser_rounds_away_is_claimed_as_unknown() {
+    let s = scored("jpeg75f16_s57_9", "exact");
+    let t = truth("jpeg75f16_s57_9");
+    let c = &s.m.curves[0];
+    let (mut worst, mut lost) = (0.0f64, 0);
+    for p in c.points.iter().filter(|p| !p.aliased) {
+        if !(0.01..=0.45).contains(&p.freq_cy_px) {
+            continue;
+        }
+        let truth = truth_at(&t, p.freq_cy_px);
+        let z = (p.mtf - truth) / p.mtf_err;
+        worst = worst.max(z.abs());
+        if p.freq_cy_px > 0.39 && p.mtf < 0.5 * truth {
+            lost += 1;
+            assert!(p.mtf_err > 0.005, "{} ± {}", p.mtf, p.mtf_err);
+        }
+        // Well clear of the dead zone (MTF > 0.3, ≥ 30 codes), claims as
+        // the noise gives them.
+        if truth > 0.3 {
+            assert!(p.mtf_err < 0.004, "{}: ± {}", p.freq_cy_px, p.mtf_err);
+        }
+    }
+    assert!(lost >= 5, "{lost} points read under half the lens's MTF");
+    assert!(worst <= 2.5, "worst |z| {worst}");
+    s.assert_within(0.012, 0.01, 2.5);
+}
