@@ -66,15 +66,34 @@ struct Blocks {
     norm: f64,
     /// The amplitude (codes) at which the largest coefficient reaches half its step.
     dead_zone: f64,
+    /// The AC coefficients that some amplitude up to the one the blocks
+    /// were made for lifts to half a step or more at some phase (the others
+    /// round to 0 at every amplitude tried, and add nothing to the read-back).
+    live: Vec<usize>,
+}
+
+/// The complex DCT coefficients (natural order: v rows, u columns) of
+/// e^{i 2π(fx·x + fy·y)} over a block, whose real part at phase φ is the
+/// cosine's: the product of the 1-D ones, cos(A + B + φ) = Re(e^{iφ} e^{iA} e^{iB}).
+fn block_coefficients(sine: &PointSine) -> [Complex64; 64] {
+    let ex = dct_of_exponential(sine.freq_cy_px * sine.angle_rad.cos());
+    let ey = dct_of_exponential(sine.freq_cy_px * sine.angle_rad.sin());
+    std::array::from_fn(|k| ey[k / 8] * ex[k % 8])
+}
+
+/// The amplitude (codes) at which the largest of the coefficients `z`
+/// reaches half its step in `table` at some phase.
+fn dead_zone(z: &[Complex64; 64], table: &[u16; 64]) -> f64 {
+    (1..64)
+        .filter(|&k| z[k].norm() > 1e-9)
+        .map(|k| table[k].max(1) as f64 / (2.0 * z[k].norm()))
+        .fold(f64::INFINITY, f64::min)
 }
 
 impl Blocks {
-    fn of(sine: &PointSine, table: &[u16; 64]) -> Blocks {
-        let ex = dct_of_exponential(sine.freq_cy_px * sine.angle_rad.cos());
-        let ey = dct_of_exponential(sine.freq_cy_px * sine.angle_rad.sin());
-        // The 2-D coefficient of a block (v rows, u columns) is the
-        // product of the 1-D ones: cos(A + B + φ) = Re(e^{iφ} e^{iA} e^{iB}).
-        let z: [Complex64; 64] = std::array::from_fn(|k| ey[k / 8] * ex[k % 8]);
+    /// The blocks of a sine of coefficients `z` ([`block_coefficients`])
+    /// under `table`, for amplitudes up to `a_max` (codes).
+    fn of(z: &[Complex64; 64], table: &[u16; 64], a_max: f64) -> Blocks {
         let unit: Vec<[f64; 64]> = (0..PHASES)
             .map(|j| {
                 let turn =
@@ -83,19 +102,20 @@ impl Blocks {
             })
             .collect();
         let norm = unit.iter().flatten().map(|c| c * c).sum();
-        let dead_zone = (1..64)
-            .filter(|&k| z[k].norm() > 1e-9)
-            .map(|k| table[k].max(1) as f64 / (2.0 * z[k].norm()))
-            .fold(f64::INFINITY, f64::min);
+        let live = (1..64)
+            .filter(|&k| a_max * z[k].norm() >= 0.5 * table[k].max(1) as f64)
+            .collect();
         Blocks {
             unit,
             norm,
-            dead_zone,
+            dead_zone: dead_zone(z, table),
+            live,
         }
     }
 
     /// The amplitude (codes) read back from a sine of amplitude `a` (codes)
-    /// after every AC coefficient is rounded to its step: the decoded
+    /// (up to the blocks' `a_max`) after every AC coefficient is rounded to
+    /// its step: the decoded
     /// blocks projected on the sine, over all phases. The DC is left
     /// exact (the blocks' means carry the strip's mean, whose rounding
     /// falls anywhere against the sine's share).
@@ -103,7 +123,7 @@ impl Blocks {
         let mut dot = 0.0;
         for unit in &self.unit {
             dot += a * unit[0] * unit[0];
-            for k in 1..64 {
+            for &k in &self.live {
                 let step = table[k].max(1) as f64;
                 dot += step * (a * unit[k] / step).round() * unit[k];
             }
@@ -121,14 +141,15 @@ impl Blocks {
 /// clear of the dead zone, where the rounding errors of the blocks' phases
 /// average out (their ripple is [`super::block_ripple`]'s).
 fn error_codes(sine: &PointSine, table: &[u16; 64], a_read: f64, sigma: f64) -> f64 {
-    let blocks = Blocks::of(sine, table);
-    let dz = blocks.dead_zone;
+    let z = block_coefficients(sine);
+    let dz = dead_zone(&z, table);
     let reach = CONSISTENT_SIGMAS * sigma;
     if !(dz.is_finite() && dz > 0.0) || a_read - reach > CLEAR_OF_DEAD_ZONE * dz {
         return 0.0;
     }
     let lo = (a_read - reach - 4.0 * dz).max(0.0);
     let hi = a_read.max(0.0) + reach + 4.0 * dz;
+    let blocks = Blocks::of(&z, table, hi);
     let step = (hi - lo) / (AMPLITUDES - 1) as f64;
     let tried: Vec<(f64, f64)> = (0..AMPLITUDES)
         .map(|i| {

@@ -37,7 +37,7 @@ fn the_coefficients_are_the_standards_fdct() {
             angle_rad: angle,
             codes_per_modulation: 1.0,
         };
-        let b = Blocks::of(&sine, &q75());
+        let b = Blocks::of(&block_coefficients(&sine), &q75(), 0.0);
         for (j, unit) in b.unit.iter().enumerate() {
             let phi = std::f64::consts::TAU * j as f64 / PHASES as f64;
             for k in 0..64 {
@@ -99,7 +99,7 @@ fn the_dead_zone_is_where_a_jpeg_encoder_and_decoder_lose_the_sine() {
             }
             let det = cc * ss - cs * cs;
             let read = ((yc * ss - ys * cs) / det).hypot((ys * cc - yc * cs) / det);
-            let blocks = Blocks::of(&sine, &table);
+            let blocks = Blocks::of(&block_coefficients(&sine), &table, a);
             let dz = blocks.dead_zone;
             if a < 0.9 * dz {
                 let model = blocks.read_back(a, &table);
