@@ -64,8 +64,6 @@ struct Blocks {
     unit: Vec<[f64; 64]>,
     /// Σ over phases of Σ coefficient² (the projection's norm).
     norm: f64,
-    /// The amplitude (codes) at which the largest coefficient reaches half its step.
-    dead_zone: f64,
     /// The AC coefficients that some amplitude up to the one the blocks
     /// were made for lifts to half a step or more at some phase (the others
     /// round to 0 at every amplitude tried, and add nothing to the read-back).
@@ -105,12 +103,7 @@ impl Blocks {
         let live = (1..64)
             .filter(|&k| a_max * z[k].norm() >= 0.5 * table[k].max(1) as f64)
             .collect();
-        Blocks {
-            unit,
-            norm,
-            dead_zone: dead_zone(z, table),
-            live,
-        }
+        Blocks { unit, norm, live }
     }
 
     /// The amplitude (codes) read back from a sine of amplitude `a` (codes)

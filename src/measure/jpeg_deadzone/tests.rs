@@ -99,8 +99,8 @@ fn the_dead_zone_is_where_a_jpeg_encoder_and_decoder_lose_the_sine() {
             }
             let det = cc * ss - cs * cs;
             let read = ((yc * ss - ys * cs) / det).hypot((ys * cc - yc * cs) / det);
-            let blocks = Blocks::of(&block_coefficients(&sine), &table, a);
-            let dz = blocks.dead_zone;
+            let z = block_coefficients(&sine);
+            let (blocks, dz) = (Blocks::of(&z, &table, a), dead_zone(&z, &table));
             if a < 0.9 * dz {
                 let model = blocks.read_back(a, &table);
                 assert!(read < 0.1 * a && model < 0.1 * a, "{f} {a}: {read} {model}");
