@@ -155,6 +155,7 @@ impl NativeMeasurement {
                 d.set_item("sharpening_peak", c.figures.sharpening_peak)?;
                 d.set_item("mtf_nyquist", c.figures.mtf_nyquist)?;
                 d.set_item("aliasing_from_cy_px", c.aliasing_from_cy_px)?;
+                d.set_item("rounded_away_from_cy_px", c.rounded_away_from_cy_px)?;
                 d.set_item("clipped_fraction", c.clipped_fraction)?;
                 d.set_item("region_px", c.region_px.to_vec())?;
                 Ok(d)

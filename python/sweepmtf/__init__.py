@@ -91,6 +91,7 @@ class Curve:
     chart_modulation: float
     chart_modulation_source: str
     aliasing_from_cy_px: Optional[float]
+    rounded_away_from_cy_px: Optional[float]
     clipped_fraction: float
     region_px: List[Tuple[float, float]] = field(repr=False)
 
@@ -144,6 +145,7 @@ class Measurement:
                     chart_modulation=d["chart_modulation"],
                     chart_modulation_source=d["chart_modulation_source"],
                     aliasing_from_cy_px=d["aliasing_from_cy_px"],
+                    rounded_away_from_cy_px=d["rounded_away_from_cy_px"],
                     clipped_fraction=d["clipped_fraction"],
                     region_px=[tuple(p) for p in d["region_px"]],
                 )

@@ -39,6 +39,7 @@ class Curve:
     chart_modulation: float
     chart_modulation_source: str
     aliasing_from_cy_px: Optional[float]
+    rounded_away_from_cy_px: Optional[float]
     clipped_fraction: float
     region_px: List[Tuple[float, float]]
 

@@ -35,7 +35,8 @@ def assert_summary_matches(py_summary, cli_summary, tol=1e-12):
     assert len(py_summary["curves"]) == len(cli_summary["curves"]) > 0
     for p, c in zip(py_summary["curves"], cli_summary["curves"]):
         assert (p["channel"], p["sweep"]) == (c["channel"], c["sweep"])
-        for k in ("chart_modulation", "aliasing_from_cy_px", "clipped_fraction", "mtf_at_nyquist"):
+        for k in ("chart_modulation", "aliasing_from_cy_px", "rounded_away_from_cy_px",
+                  "clipped_fraction", "mtf_at_nyquist"):
             assert close(p[k], c[k], tol), (k, p[k], c[k])
         for k in ("mtf50", "mtf30", "mtf20", "mtf10", "mtf50p", "mtf20p", "mtf10p"):
             pv, cv = p[k], c[k]

@@ -206,29 +206,55 @@ pub(super) fn codes_per_value(value_of_code: impl Fn(f64) -> f64, y: f64) -> Opt
     (slope > 0.0 && slope.is_finite()).then(|| 255.0 / slope)
 }
 
+/// A point read at most this many dead zones (beyond its noise) has had its
+/// sine rounded away: what is left is the file's, not the lens's.
+const ROUNDED_AWAY: f64 = 0.5;
+
 /// Adds to each point's uncertainty (modulation units, before the chart
 /// modulation divides it) the error the JPEG's luma quantiser `table`
 /// leaves there; `sine_at` gives a point's sine in the photo, None where
-/// its codes are not known.
+/// its codes are not known. Returns the frequency (cycles/pixel) from which
+/// every non-aliased point to the curve's end reads its sine rounded away
+/// (within [`ROUNDED_AWAY`] dead zones of nothing), if the last one does.
 pub(super) fn widen(
     points: &mut [MtfPoint],
     table: &[u16; 64],
     sine_at: impl Fn(&MtfPoint) -> Option<PointSine>,
-) {
+) -> Option<f64> {
+    let mut lost_from = None;
     for p in points.iter_mut().filter(|p| !p.aliased) {
         let Some(sine) = sine_at(p).filter(|s| {
             s.codes_per_modulation.is_finite()
                 && s.codes_per_modulation > 0.0
                 && s.freq_cy_px.is_finite()
         }) else {
+            lost_from = None;
             continue;
         };
         let k = sine.codes_per_modulation;
-        let e = error_codes(&sine, table, p.modulation * k, p.mtf_err * k) / k;
+        let (a_read, sigma) = (p.modulation * k, p.mtf_err * k);
+        let e = error_codes(&sine, table, a_read, sigma) / k;
         if e.is_finite() && e > 0.0 {
             p.mtf_err = p.mtf_err.hypot(e);
         }
+        let dz = dead_zone(&block_coefficients(&sine), table);
+        if a_read.abs() + CONSISTENT_SIGMAS * sigma <= ROUNDED_AWAY * dz {
+            lost_from.get_or_insert(p.freq_cy_px);
+        } else {
+            lost_from = None;
+        }
     }
+    lost_from
+}
+
+/// The warning for a curve whose sine the quantiser rounds away from
+/// `from` (cycles/pixel) to its end; `name` the curve's.
+pub(super) fn rounded_away_warning(name: &str, from: f64) -> String {
+    format!(
+        "{name}: from {from:.3} cy/px to the curve's end the JPEG's quantiser rounds the sine \
+         away (under half its steps in every 8×8 block): the MTF there is the file's, not the \
+         lens's, and its points claim so; shoot at a higher quality or raw to measure the lens there"
+    )
 }
 
 #[cfg(test)]

@@ -541,6 +541,12 @@ fn measure_planes_lens(
                     square.push((format!("{name}/{}", c.sweep_id), drift));
                 }
             }
+            if let Some(f) = c.rounded_away_from_cy_px {
+                warnings.push(jpeg_deadzone::rounded_away_warning(
+                    &format!("{name}/{}", c.sweep_id),
+                    f,
+                ));
+            }
             if c.chart_modulation_source.starts_with("extrapolated") {
                 warnings.push(format!(
                     "{name}/{}: chart modulation {:.4} {}",

@@ -222,6 +222,7 @@ mod tests {
             chart_modulation_source: "test".into(),
             figures: Default::default(),
             aliasing_from_cy_px: None,
+            rounded_away_from_cy_px: None,
             clipped_fraction: 0.0,
             region_px: [[0.0; 2]; 4],
             outline_px: Vec::new(),

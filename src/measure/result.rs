@@ -97,6 +97,9 @@ pub struct Curve {
     pub figures: Figures,
     /// Lowest aliased frequency (cycles/pixel), if any point is aliased.
     pub aliasing_from_cy_px: Option<f64>,
+    /// Where a JPEG's quantiser rounds the sine away, from here to the
+    /// curve's end (cycles/pixel): the MTF there is the file's, not the lens's.
+    pub rounded_away_from_cy_px: Option<f64>,
     /// Fraction of the region's samples at clipping.
     pub clipped_fraction: f64,
     /// Image corners of the binned region.

@@ -347,9 +347,10 @@ pub(super) fn measure_strip(
     if coding.block_ripple {
         block_ripple::smooth(&mut points, block_ripple::RIPPLE_RMS_MTF * m_chart);
     }
+    let mut rounded_away_from = None;
     if let Some((table, tone)) = coding.jpeg_luma {
         let value_of_code = |c: f64| fixed_value(tone_fix.as_ref(), tone.apply(c));
-        jpeg_deadzone::widen(&mut points, table, |p| {
+        rounded_away_from = jpeg_deadzone::widen(&mut points, table, |p| {
             let mean = jpeg_deadzone::local_mean(&prof, p.s, 1.0 / p.freq_chart)?;
             Some(jpeg_deadzone::PointSine {
                 freq_cy_px: p.freq_cy_px,
@@ -464,6 +465,7 @@ pub(super) fn measure_strip(
         chart_modulation_source: source,
         figures,
         aliasing_from_cy_px: aliasing_from,
+        rounded_away_from_cy_px: rounded_away_from,
         clipped_fraction: clipped,
         region_px: strip.image_quad(opts.margin * strip.width, (1.0 - opts.margin) * strip.width),
         outline_px: match strip.lens {

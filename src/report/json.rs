@@ -66,6 +66,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                 "chart_modulation_err": c.chart_modulation_err,
                 "chart_modulation_source": c.chart_modulation_source,
                 "aliasing_from_cy_px": c.aliasing_from_cy_px,
+                "rounded_away_from_cy_px": c.rounded_away_from_cy_px,
                 "clipped_fraction": c.clipped_fraction,
                 "points": c.points.len(),
                 "points_aliased": c.points.iter().filter(|p| p.aliased).count(),

@@ -329,7 +329,8 @@ fn a_picture_style_seen_too_weakly_to_take_out_widens_the_chart_modulations_clai
 /// 0 where the lens passes up to 0.02. Until session 43 each point there
 /// claimed ±0.0004–0.002 (|z| up to 23); the quantiser's dead zone now
 /// joins each point's uncertainty (`jpeg_deadzone`): every point's error
-/// within 2.5 of its claims, and the claims grow only where the sine nears it.
+/// within 2.5 of its claims, and the claims grow only where the sine nears
+/// it; a warning says from where to the curve's end the sine is rounded away.
 #[test]
 fn a_sine_the_jpeg_quantiser_rounds_away_is_claimed_as_unknown() {
     let s = scored("jpeg75f16_s57_9", "exact");
@@ -355,5 +356,17 @@ fn a_sine_the_jpeg_quantiser_rounds_away_is_claimed_as_unknown() {
     }
     assert!(lost >= 5, "{lost} points read under half the lens's MTF");
     assert!(worst <= 2.5, "worst |z| {worst}");
+    // Said where: from where the sine is rounded away to the curve's end.
+    let from = c
+        .rounded_away_from_cy_px
+        .expect("the rounded-away sine said");
+    assert!((0.36..=0.43).contains(&from), "{from}");
+    assert!(
+        s.m.warnings.iter().any(|w| w.contains(&format!(
+            "from {from:.3} cy/px to the curve's end the JPEG's quantiser rounds"
+        ))),
+        "{:?}",
+        s.m.warnings
+    );
     s.assert_within(0.012, 0.01, 2.5);
 }
