@@ -69,16 +69,29 @@ def test_path_gives_the_cli_result(cli_run):
 
 
 def test_array_gives_the_path_result(cli_run):
+    """The decoded pixels give the file's values. An array holds no JPEG
+    quantisation table, so its points do not carry the quantiser's dead
+    zone (the file's claims are the same or wider, never narrower), and the
+    figures the claims weigh move by a hair (this JPEG's MTF10 at 0.475
+    cy/px, near the dead zone: 0.06 %)."""
     _, cli_summary = cli_run
     arr = sweepmtf.read_photo(SHOT)
     assert arr.dtype == np.uint8 and arr.ndim in (2, 3)
     m = sweepmtf.measure(arr, target=TARGET, name=str(SHOT))
-    assert_summary_matches(m.summary, cli_summary)
+    assert len(m.summary["curves"]) == len(cli_summary["curves"]) > 0
+    for a, c in zip(m.summary["curves"], cli_summary["curves"]):
+        for k in ("chart_modulation", "aliasing_from_cy_px", "clipped_fraction", "mtf_at_nyquist"):
+            assert close(a[k], c[k], 1e-12), (k, a[k], c[k])
+        assert a["rounded_away_from_cy_px"] is None
+        for k in ("mtf50", "mtf30", "mtf20", "mtf10", "mtf50p", "mtf20p", "mtf10p"):
+            assert (a[k] is None) == (c[k] is None), k
+            if a[k] is not None:
+                assert close(a[k]["cy_px"], c[k]["cy_px"], 2e-3), (k, a[k], c[k])
     p = sweepmtf.measure(SHOT, target=TARGET)
     for a, b in zip(m.curves, p.curves):
         np.testing.assert_allclose(a.freq_cy_px, b.freq_cy_px, rtol=1e-12, atol=0)
         np.testing.assert_allclose(a.mtf, b.mtf, rtol=1e-12, atol=1e-15)
-        np.testing.assert_allclose(a.mtf_err, b.mtf_err, rtol=1e-12, atol=1e-15)
+        assert np.all(a.mtf_err <= b.mtf_err * (1 + 1e-12) + 1e-15)
         np.testing.assert_array_equal(a.aliased, b.aliased)
     # A view that is not C-contiguous (every column, reversed twice) is accepted.
     view = arr[:, ::-1][:, ::-1]
