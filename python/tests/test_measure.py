@@ -72,8 +72,9 @@ def test_array_gives_the_path_result(cli_run):
     """The decoded pixels give the file's values. An array holds no JPEG
     quantisation table, so its points do not carry the quantiser's dead
     zone (the file's claims are the same or wider, never narrower), and the
-    figures the claims weigh move by a hair (this JPEG's MTF10 at 0.475
-    cy/px, near the dead zone: 0.06 %)."""
+    crossings whose local fit weighs the points by their claims move near it
+    (this JPEG's MTF20 at 0.39 cy/px: array 0.3934, file 0.3973, truth
+    0.3953; MTF10 0.4747 / 0.4750 / 0.4781)."""
     _, cli_summary = cli_run
     arr = sweepmtf.read_photo(SHOT)
     assert arr.dtype == np.uint8 and arr.ndim in (2, 3)
@@ -86,7 +87,7 @@ def test_array_gives_the_path_result(cli_run):
         for k in ("mtf50", "mtf30", "mtf20", "mtf10", "mtf50p", "mtf20p", "mtf10p"):
             assert (a[k] is None) == (c[k] is None), k
             if a[k] is not None:
-                assert close(a[k]["cy_px"], c[k]["cy_px"], 2e-3), (k, a[k], c[k])
+                assert close(a[k]["cy_px"], c[k]["cy_px"], 6e-3), (k, a[k], c[k])
     p = sweepmtf.measure(SHOT, target=TARGET)
     for a, b in zip(m.curves, p.curves):
         np.testing.assert_allclose(a.freq_cy_px, b.freq_cy_px, rtol=1e-12, atol=0)
