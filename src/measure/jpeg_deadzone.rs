@@ -133,16 +133,15 @@ impl Blocks {
 /// elsewhere for another, so only its trend is the blocks'). Zero well
 /// clear of the dead zone, where the rounding errors of the blocks' phases
 /// average out (their ripple is [`super::block_ripple`]'s).
-fn error_codes(sine: &PointSine, table: &[u16; 64], a_read: f64, sigma: f64) -> f64 {
-    let z = block_coefficients(sine);
-    let dz = dead_zone(&z, table);
+/// `z` are the sine's [`block_coefficients`], `dz` their [`dead_zone`].
+fn error_codes(z: &[Complex64; 64], dz: f64, table: &[u16; 64], a_read: f64, sigma: f64) -> f64 {
     let reach = CONSISTENT_SIGMAS * sigma;
     if !(dz.is_finite() && dz > 0.0) || a_read - reach > CLEAR_OF_DEAD_ZONE * dz {
         return 0.0;
     }
     let lo = (a_read - reach - 4.0 * dz).max(0.0);
     let hi = a_read.max(0.0) + reach + 4.0 * dz;
-    let blocks = Blocks::of(&z, table, hi);
+    let blocks = Blocks::of(z, table, hi);
     let step = (hi - lo) / (AMPLITUDES - 1) as f64;
     let tried: Vec<(f64, f64)> = (0..AMPLITUDES)
         .map(|i| {
@@ -233,11 +232,12 @@ pub(super) fn widen(
         };
         let k = sine.codes_per_modulation;
         let (a_read, sigma) = (p.modulation * k, p.mtf_err * k);
-        let e = error_codes(&sine, table, a_read, sigma) / k;
+        let z = block_coefficients(&sine);
+        let dz = dead_zone(&z, table);
+        let e = error_codes(&z, dz, table, a_read, sigma) / k;
         if e.is_finite() && e > 0.0 {
             p.mtf_err = p.mtf_err.hypot(e);
         }
-        let dz = dead_zone(&block_coefficients(&sine), table);
         if a_read.abs() + CONSISTENT_SIGMAS * sigma <= ROUNDED_AWAY * dz {
             lost_from.get_or_insert(p.freq_cy_px);
         } else {

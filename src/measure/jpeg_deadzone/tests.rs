@@ -107,7 +107,7 @@ fn the_dead_zone_is_where_a_jpeg_encoder_and_decoder_lose_the_sine() {
                 in_zone += 1;
             }
             if a <= 2.0 * dz {
-                let claimed = error_codes(&sine, &table, read, 0.05).hypot(0.05);
+                let claimed = error_codes(&z, dz, &table, read, 0.05).hypot(0.05);
                 let z = (read - a) / claimed;
                 assert!(z.abs() <= 2.5, "{f} {a}: read {read}, claimed ± {claimed}");
                 near += 1;
