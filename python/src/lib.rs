@@ -17,6 +17,9 @@ use sweepmtf::measure::in_memory::{
 use sweepmtf::measure::{Failure, MeasureError, MeasureOptions, Measurement};
 use sweepmtf::photo::decode::{Samples, decode_file};
 
+/// Two float arrays handed to Python together: (values, coordinates).
+type ArrayPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
 create_exception!(
     sweepmtf,
     MeasurementError,
@@ -529,12 +532,7 @@ impl NativeModel {
         Ok(d)
     }
     /// A size×size map of the MTF over ±f_max cycles/mm: (flat mtf, coords).
-    fn map<'py>(
-        &self,
-        py: Python<'py>,
-        f_max: f64,
-        size: usize,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+    fn map<'py>(&self, py: Python<'py>, f_max: f64, size: usize) -> PyResult<ArrayPair<'py>> {
         use sweepmtf::report::model_map::compute_map;
         if !(f_max.is_finite() && f_max > 0.0) {
             return Err(value_err(format!(
