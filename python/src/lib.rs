@@ -143,6 +143,8 @@ impl NativeMeasurement {
                 d.set_item("mtf_err", col(|p| p.mtf_err))?;
                 let aliased: Vec<bool> = c.points.iter().map(|p| p.aliased).collect();
                 d.set_item("aliased", PyArray1::from_vec(py, aliased))?;
+                let limited: Vec<bool> = c.points.iter().map(|p| p.jpeg_limited).collect();
+                d.set_item("jpeg_limited", PyArray1::from_vec(py, limited))?;
                 d.set_item("chart_modulation", c.chart_modulation)?;
                 d.set_item("chart_modulation_source", &c.chart_modulation_source)?;
                 d.set_item("mtf50_cy_px", c.figures.mtf50_cy_px)?;

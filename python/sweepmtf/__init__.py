@@ -42,7 +42,16 @@ __all__ = [
 PathLike = Union[str, "os.PathLike[str]"]
 Photo = Union[PathLike, np.ndarray]
 
-_CURVE_COLUMNS = ("s", "freq_cy_px", "freq_chart", "modulation", "mtf", "mtf_err", "aliased")
+_CURVE_COLUMNS = (
+    "s",
+    "freq_cy_px",
+    "freq_chart",
+    "modulation",
+    "mtf",
+    "mtf_err",
+    "aliased",
+    "jpeg_limited",
+)
 
 
 @dataclass(frozen=True)
@@ -54,7 +63,10 @@ class Curve:
     the sensor, None without a pixel pitch), ``freq_chart`` (cycles per strip unit:
     cycles/mm on the chart with a target), ``modulation`` (image modulation, linear
     light), ``mtf`` (modulation / chart modulation), ``mtf_err`` (one-sigma
-    uncertainty of the MTF), ``aliased`` (bool: the value is not an MTF there).
+    uncertainty of the MTF), ``aliased`` (bool: the value is not an MTF there),
+    ``jpeg_limited`` (bool: a JPEG's quantiser, not noise, is the larger part of
+    ``mtf_err`` there, or rounded the sine away: the value is more the file's
+    than the lens's).
 
     Figures (cycles/pixel, None when not reached): ``mtf50``, ``mtf30``, ``mtf20``,
     ``mtf10`` (where the MTF falls to nn % of its low-frequency value 1);
@@ -76,6 +88,7 @@ class Curve:
     mtf: np.ndarray
     mtf_err: np.ndarray
     aliased: np.ndarray
+    jpeg_limited: np.ndarray
     mtf50: Optional[float]
     mtf50_err: Optional[float]
     mtf30: Optional[float]
@@ -130,6 +143,7 @@ class Measurement:
                     mtf=d["mtf"],
                     mtf_err=d["mtf_err"],
                     aliased=d["aliased"],
+                    jpeg_limited=d["jpeg_limited"],
                     mtf50=d["mtf50_cy_px"],
                     mtf50_err=d["mtf50_err_cy_px"],
                     mtf30=d["mtf30_cy_px"],

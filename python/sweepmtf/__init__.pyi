@@ -24,6 +24,7 @@ class Curve:
     mtf: npt.NDArray[np.float64]
     mtf_err: npt.NDArray[np.float64]
     aliased: npt.NDArray[np.bool_]
+    jpeg_limited: npt.NDArray[np.bool_]
     mtf50: Optional[float]
     mtf50_err: Optional[float]
     mtf30: Optional[float]

@@ -44,6 +44,8 @@ def assert_summary_matches(py_summary, cli_summary, tol=1e-12, crossing_tol=None
             assert close(p[k], c[k], tol), (k, p[k], c[k])
         k = "rounded_away_from_cy_px"
         assert p[k] is None if array else close(p[k], c[k], tol), (k, p[k], c[k])
+        k = "points_jpeg_limited"
+        assert p[k] == 0 if array else p[k] == c[k], (k, p[k], c[k])
         for k in ("mtf50", "mtf30", "mtf20", "mtf10", "mtf50p", "mtf20p", "mtf10p"):
             pv, cv = p[k], c[k]
             assert (pv is None) == (cv is None), k
@@ -92,6 +94,8 @@ def test_array_gives_the_path_result(cli_run):
         np.testing.assert_allclose(a.mtf, b.mtf, rtol=1e-12, atol=1e-15)
         assert np.all(a.mtf_err <= b.mtf_err * (1 + 1e-12) + 1e-15)
         np.testing.assert_array_equal(a.aliased, b.aliased)
+        assert not a.jpeg_limited.any()
+        assert b.jpeg_limited.dtype == np.bool_ and len(b.jpeg_limited) == len(b.mtf)
     # A view that is not C-contiguous (every column, reversed twice) is accepted.
     view = arr[:, ::-1][:, ::-1]
     assert not view.flags["C_CONTIGUOUS"] or view.base is not None

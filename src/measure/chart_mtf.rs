@@ -438,6 +438,7 @@ mod tests {
                     mtf: m,
                     mtf_err: e,
                     aliased,
+                    jpeg_limited: false,
                 })
                 .collect(),
             chart_modulation: 1.0,

@@ -299,6 +299,7 @@ pub(super) mod tests {
                     mtf: f(fr),
                     mtf_err: err,
                     aliased: fr > 0.5,
+                    jpeg_limited: false,
                 }
             })
             .collect()

@@ -211,7 +211,8 @@ const ROUNDED_AWAY: f64 = 0.5;
 
 /// Adds to each point's uncertainty (modulation units, before the chart
 /// modulation divides it) the error the JPEG's luma quantiser `table`
-/// leaves there; `sine_at` gives a point's sine in the photo, None where
+/// leaves there, and marks the point `jpeg_limited` where that error is
+/// larger than the rest of its uncertainty or its sine is rounded away; `sine_at` gives a point's sine in the photo, None where
 /// its codes are not known. Returns the frequency (cycles/pixel) from which
 /// every non-aliased point to the curve's end reads its sine rounded away
 /// (within [`ROUNDED_AWAY`] dead zones of nothing), if the last one does.
@@ -236,9 +237,11 @@ pub(super) fn widen(
         let dz = dead_zone(&z, table);
         let e = error_codes(&z, dz, table, a_read, sigma) / k;
         if e.is_finite() && e > 0.0 {
+            p.jpeg_limited = e > p.mtf_err;
             p.mtf_err = p.mtf_err.hypot(e);
         }
         if a_read.abs() + CONSISTENT_SIGMAS * sigma <= ROUNDED_AWAY * dz {
+            p.jpeg_limited = true;
             lost_from.get_or_insert(p.freq_cy_px);
         } else {
             lost_from = None;

@@ -215,6 +215,7 @@ mod tests {
                     mtf: m,
                     mtf_err: err,
                     aliased: false,
+                    jpeg_limited: false,
                 })
                 .collect(),
             chart_modulation: 1.0,

@@ -131,6 +131,7 @@ pub(super) fn low_end_points(
                 mtf: fit.modulation(),
                 mtf_err: fit.modulation_err(),
                 aliased: false,
+                jpeg_limited: false,
             };
             (whole
                 && fit.mean > 0.0
@@ -295,6 +296,7 @@ mod tests {
                     mtf: m,
                     mtf_err: 1e-3,
                     aliased: false,
+                    jpeg_limited: false,
                 }
             })
             .collect();

@@ -285,6 +285,7 @@ pub(super) fn measure_strip(
                 mtf: m.modulation,
                 mtf_err: m.err,
                 aliased: f_px > band_limit(m.s) || d.is_some_and(|d| d.abs() > 0.05),
+                jpeg_limited: false,
             }
         })
         .filter(|p| p.modulation.is_finite() && p.freq_cy_px.is_finite())

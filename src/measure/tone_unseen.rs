@@ -201,6 +201,7 @@ mod tests {
             mtf,
             mtf_err: 0.001,
             aliased: false,
+            jpeg_limited: false,
         }
     }
 

@@ -17,7 +17,7 @@ fn num(v: f64) -> String {
     format!("{v:.6}")
 }
 
-/// The sweep curves as CSV: `freq_cy_px,mtf,[freq_cy_mm,]freq_lw_ph,modulation,mtf_err,aliased`
+/// The sweep curves as CSV: `freq_cy_px,mtf,[freq_cy_mm,]freq_lw_ph,modulation,mtf_err,aliased,jpeg_limited`
 /// (+ `freq_chart_cy_mm` with a target, + `channel,sweep` when there are several curves,
 /// + `rb_spread` with colour moiré: |MTF_R − MTF_B| on the red rows, empty on the others).
 pub fn curves_csv(m: &Measurement) -> Vec<u8> {
@@ -29,7 +29,13 @@ pub fn curves_csv(m: &Measurement) -> Vec<u8> {
     if pitch.is_some() {
         head.push("freq_cy_mm");
     }
-    head.extend(["freq_lw_ph", "modulation", "mtf_err", "aliased"]);
+    head.extend([
+        "freq_lw_ph",
+        "modulation",
+        "mtf_err",
+        "aliased",
+        "jpeg_limited",
+    ]);
     if chart_mm {
         head.push("freq_chart_cy_mm");
     }
@@ -56,6 +62,7 @@ pub fn curves_csv(m: &Measurement) -> Vec<u8> {
             row.push(num(p.modulation));
             row.push(num(p.mtf_err));
             row.push(p.aliased.to_string());
+            row.push(p.jpeg_limited.to_string());
             if chart_mm {
                 row.push(num(p.freq_chart));
             }

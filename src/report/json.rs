@@ -70,6 +70,7 @@ pub fn summary(m: &Measurement, t: Option<Timings>) -> Value {
                 "clipped_fraction": c.clipped_fraction,
                 "points": c.points.len(),
                 "points_aliased": c.points.iter().filter(|p| p.aliased).count(),
+                "points_jpeg_limited": c.points.iter().filter(|p| p.jpeg_limited).count(),
                 "print_ends_inside_px": c.print_ends_inside_px,
                 "tone_correction": c.tone_fix.as_ref().map(|f| json!({
                     "used": f.used,

@@ -197,6 +197,7 @@ where
         .label("Nyquist (0.5 cy/px)")
         .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RGBColor(120, 120, 120)));
     let mut aliased_in_legend = false;
+    let mut limited_in_legend = false;
     let names: Vec<(&str, &str)> = m
         .curves
         .iter()
@@ -278,6 +279,29 @@ where
                 .map_err(err)?;
         }
         draw_peak_marks(&mut chart, c, col, k, ymax)?;
+        // Points whose value is more the JPEG quantiser's than the lens's:
+        // a hollow ring in the curve's colour, one legend entry for all curves.
+        let limited: Vec<_> = good
+            .iter()
+            .filter(|p| p.jpeg_limited && p.freq_cy_px <= xmax)
+            .collect();
+        if !limited.is_empty() {
+            let rings = chart
+                .draw_series(limited.iter().map(|p| {
+                    Circle::new(
+                        (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
+                        3,
+                        col.stroke_width(1),
+                    )
+                }))
+                .map_err(err)?;
+            if !limited_in_legend {
+                limited_in_legend = true;
+                rings
+                    .label("JPEG-limited (the file's, not the lens's)")
+                    .legend(|(x, y)| Circle::new((x + 9, y), 3, BLACK.stroke_width(1)));
+            }
+        }
     }
     super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     super::model_overlay::draw_lens_curves(&mut chart, extras, xmax, ymax).map_err(err)?;

@@ -332,7 +332,9 @@ fn a_picture_style_under_a_sharpened_code_is_taken_out_and_the_chart_modulation_
 /// claimed ±0.0004–0.002 (|z| up to 23); the quantiser's dead zone now
 /// joins each point's uncertainty (`jpeg_deadzone`): every point's error
 /// within 2.5 of its claims, and the claims grow only where the sine nears
-/// it; a warning says from where to the curve's end the sine is rounded away.
+/// it; a warning says from where to the curve's end the sine is rounded away,
+/// and each point lost there is flagged `jpeg_limited` (none where the MTF
+/// is above 0.3).
 #[test]
 fn a_sine_the_jpeg_quantiser_rounds_away_is_claimed_as_unknown() {
     let s = scored("jpeg75f16_s57_9", "exact");
@@ -349,11 +351,13 @@ fn a_sine_the_jpeg_quantiser_rounds_away_is_claimed_as_unknown() {
         if p.freq_cy_px > 0.39 && p.mtf < 0.5 * truth {
             lost += 1;
             assert!(p.mtf_err > 0.005, "{} ± {}", p.mtf, p.mtf_err);
+            assert!(p.jpeg_limited, "{}: lost, not flagged", p.freq_cy_px);
         }
         // Well clear of the dead zone (MTF > 0.3, ≥ 30 codes), claims as
-        // the noise gives them.
+        // the noise gives them, and the point is the lens's.
         if truth > 0.3 {
             assert!(p.mtf_err < 0.004, "{}: ± {}", p.freq_cy_px, p.mtf_err);
+            assert!(!p.jpeg_limited, "{}: flagged", p.freq_cy_px);
         }
     }
     assert!(lost >= 5, "{lost} points read under half the lens's MTF");
@@ -363,6 +367,13 @@ fn a_sine_the_jpeg_quantiser_rounds_away_is_claimed_as_unknown() {
         .rounded_away_from_cy_px
         .expect("the rounded-away sine said");
     assert!((0.36..=0.43).contains(&from), "{from}");
+    // Every point from there on is flagged as the file's.
+    assert!(
+        c.points
+            .iter()
+            .filter(|p| !p.aliased && p.freq_cy_px >= from)
+            .all(|p| p.jpeg_limited)
+    );
     assert!(
         s.m.warnings.iter().any(|w| w.contains(&format!(
             "from {from:.3} cy/px to the curve's end the JPEG's quantiser rounds"

@@ -79,7 +79,9 @@ fn writes_csv_json_and_both_pictures() {
         ]
     );
     let csv = std::fs::read_to_string(out.join("sweep.mtf.csv")).unwrap();
-    assert!(csv.starts_with("freq_cy_px,mtf,freq_cy_mm,freq_lw_ph,modulation,mtf_err,aliased\n"));
+    assert!(csv.starts_with(
+        "freq_cy_px,mtf,freq_cy_mm,freq_lw_ph,modulation,mtf_err,aliased,jpeg_limited\n"
+    ));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("sweep.summary.json")).unwrap())
             .unwrap();

@@ -334,6 +334,7 @@ function drawMtf() {
     el("path", { d: polyline(up.concat(dn)) + "Z", class: "band", fill: col, "fill-opacity": 0.18 }, g);
     el("path", { d: polyline(pts.filter((p) => !p.aliased).map((p) => [f.x(p.freq_cy_px), f.y(p.mtf)])), fill: "none", stroke: col, "stroke-width": 2, class: "mtf-line" }, g);
     for (const p of pts) if (p.aliased) el("circle", { cx: f.x(p.freq_cy_px), cy: f.y(p.mtf), r: 2.5, fill: "none", stroke: "#d00", class: "aliased" }, g);
+    for (const p of pts) if (p.jpeg_limited && !p.aliased) el("circle", { cx: f.x(p.freq_cy_px), cy: f.y(p.mtf), r: 3, fill: "none", stroke: col, class: "jpeg-limited" }, g);
     for (const [key, lv] of [["mtf50_cy_px", 0.5], ["mtf10_cy_px", 0.1]]) {
       const v = c.figures[key];
       if (v === null || v === undefined) continue;
@@ -347,7 +348,8 @@ function drawMtf() {
     el("path", { d: polyline(mc.freq_cy_mm.map((fm, i) => [f.x(fm * pitch), f.y(mc.mtf[i])])), fill: "none", stroke: "#555", "stroke-dasharray": "7 4", "stroke-width": 1.5, class: "model-line" }, g);
     el("text", { x: 606, y: 40 + 14 * row++, "text-anchor": "end", class: "legend", fill: "#555" }, svg, "-- model");
   }
-  if (r.curves.some((c) => c.points.some((p) => p.aliased))) el("text", { x: 606, y: 40 + 14 * row, "text-anchor": "end", class: "legend", fill: "#d00" }, svg, "○ aliased (not an MTF)");
+  if (r.curves.some((c) => c.points.some((p) => p.aliased))) el("text", { x: 606, y: 40 + 14 * row++, "text-anchor": "end", class: "legend", fill: "#d00" }, svg, "○ aliased (not an MTF)");
+  if (r.curves.some((c) => c.points.some((p) => p.jpeg_limited && !p.aliased))) el("text", { x: 606, y: 40 + 14 * row, "text-anchor": "end", class: "legend", fill: "#333" }, svg, "○ JPEG-limited (the file's, not the lens's)");
 }
 
 function drawFigures() {

@@ -33,6 +33,11 @@ pub struct MtfPoint {
     pub mtf_err: f64,
     /// True where the frequency is aliased: the value is not an MTF.
     pub aliased: bool,
+    /// True where a JPEG's quantiser, not the photo's noise, is the larger
+    /// part of `mtf_err`, or has rounded the sine away: the value there is
+    /// more the file's than the lens's.
+    #[serde(default)]
+    pub jpeg_limited: bool,
 }
 
 /// The sampling lattice of the planes binned together for one curve, as far

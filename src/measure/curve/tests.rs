@@ -68,6 +68,7 @@ fn grid(
                 mtf: mtf(fr),
                 mtf_err,
                 aliased: fr > 0.5,
+                jpeg_limited: false,
             }
         })
         .collect()

@@ -116,3 +116,62 @@ fn the_dead_zone_is_where_a_jpeg_encoder_and_decoder_lose_the_sine() {
     }
     assert!(in_zone >= 6 && near >= 16, "{in_zone} {near}");
 }
+
+/// A point is flagged as the file's where the quantiser's error outweighs
+/// the rest of its uncertainty or its sine is rounded away, and left
+/// unflagged well clear of the dead zone or where noise outweighs the
+/// quantiser. The dead zone is taken from the table directly (the largest
+/// coefficient of the standard's FDCT of the sine, at its best phase,
+/// reaching half its step), not from the code under test.
+#[test]
+fn points_the_quantiser_holds_are_flagged_as_the_files() {
+    let (table, f) = (q75(), 0.3913);
+    let dz = (1..64)
+        .map(|k| {
+            let best = (0..64)
+                .map(|j| {
+                    t81_fdct(
+                        f,
+                        0.0,
+                        std::f64::consts::TAU * j as f64 / 64.0,
+                        k % 8,
+                        k / 8,
+                    )
+                })
+                .fold(0.0f64, |m, c| m.max(c.abs()));
+            table[k] as f64 / (2.0 * best)
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(dz > 0.5 && dz < 20.0, "{dz}");
+    let point = |modulation: f64, mtf_err: f64| MtfPoint {
+        s: 0.0,
+        freq_cy_px: f,
+        freq_chart: f,
+        modulation,
+        mtf: modulation,
+        mtf_err,
+        aliased: false,
+        jpeg_limited: false,
+    };
+    // Modulation in codes here: one code per unit.
+    let mut points = vec![
+        point(20.0 * dz, 0.02 * dz), // far clear: untouched
+        point(1.5 * dz, 0.02 * dz),  // near, quiet: the quantiser dominates
+        point(1.5 * dz, 3.0 * dz),   // near, noisy: noise dominates
+        point(0.0, 0.05 * dz),       // rounded away
+    ];
+    let before: Vec<f64> = points.iter().map(|p| p.mtf_err).collect();
+    let sine_at = |p: &MtfPoint| {
+        Some(PointSine {
+            freq_cy_px: p.freq_cy_px,
+            angle_rad: 0.0,
+            codes_per_modulation: 1.0,
+        })
+    };
+    let lost = widen(&mut points, &table, sine_at);
+    let flags: Vec<bool> = points.iter().map(|p| p.jpeg_limited).collect();
+    assert_eq!(flags, [false, true, false, true], "dz {dz}: {points:?}");
+    assert_eq!(points[0].mtf_err, before[0]);
+    assert!(points[1].mtf_err > 2.0 * before[1], "{points:?}");
+    assert_eq!(lost, Some(f));
+}
