@@ -382,8 +382,11 @@ pub fn find(
         "the paper beside the strip does not follow the strip's light (not plain paper?)"
     } else if !agree {
         "the paper above and below the strip disagree (not plain paper?)"
-    } else if !(relative.abs() > MIN_EFFECT) || !(significant || better_than_unseen) {
+    } else if !(relative.abs() > MIN_EFFECT) {
         "too small to matter"
+    } else if !(significant || better_than_unseen) {
+        "known no better than an unseen one is claimed (the paper's stretches scatter, or \
+         the bands above and below the strip disagree)"
     } else if !(relative.abs() < 0.5) {
         "too large to be a black level"
     } else {
