@@ -6,13 +6,11 @@
 //! with the source, bit depth, tone line, pixel pitch, preview and warnings
 //! filled in. Also the photo's decoding with its pixel pitch resolved.
 
+use super::lens_choice::resolve_distortion;
 use super::preview::{make_preview, raw_preview};
 use super::region::{bbox_crop, read_set};
 use super::tone::photo_tone;
-use super::{
-    Failure, MeasureError, MeasureOptions, Measurement, Said, measure_planes_lens,
-    resolve_distortion,
-};
+use super::{Failure, MeasureError, MeasureOptions, Measurement, Said, measure_planes_lens};
 use crate::geometry::Point;
 use crate::locate::row_reduction::{ReducedSearch, SharedReduction};
 use crate::photo::decode::{DecodeError, Decoded, decode_bytes_observed};

@@ -10,7 +10,6 @@
 
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::distortion::Lens;
 use crate::geometry::Point;
 use crate::locate::{ConvertedCrop, sample::Gray};
 use crate::photo::decode::{Decoded, decode_file};
@@ -40,9 +39,11 @@ pub mod tone_black;
 pub mod tone_unseen;
 
 mod block_ripple;
+mod curve_said;
 mod frame;
 mod frequency;
 mod jpeg_deadzone;
+mod lens_choice;
 mod normalise;
 mod options;
 mod preview;
@@ -69,6 +70,7 @@ pub(crate) use result::{DAMAGE_MARK, Said};
 use frame::{
     decode_bytes_with_pitch, decode_for_search, measure_decoded_at, measure_frame_at, read_photo,
 };
+use lens_choice::given_distortion;
 use profile::BinOptions;
 use rayon::prelude::*;
 use region::{
@@ -342,79 +344,6 @@ fn plane_views<'a>(groups: &'a [(&'a str, Vec<Plane>)]) -> Vec<(&'a str, Vec<Pla
         .collect()
 }
 
-/// The distortion the user gave, checked against the image size (exit 2 with the allowed range).
-fn given_distortion(
-    opts: &MeasureOptions,
-    roi: &[Point; 4],
-    width: usize,
-    height: usize,
-) -> Result<Option<DistortionFound>, Failure> {
-    let Some(model) = opts.distortion.filter(|d| !d.is_zero()) else {
-        return Ok(None);
-    };
-    Lens::new(model, width, height)
-        .check()
-        .map_err(Failure::Options)?;
-    Ok(Some(lens_fit::given(model, roi, width, height)))
-}
-
-/// The distortion of a shot: as given, or estimated from the long edges of
-/// the strip (or, with a target, of the first sweep strip whose edges give a
-/// clear answer) in the luminance `luma(quad)` gives (it must reach
-/// [`lens_fit::search_pad_px`] beyond `quad`; `whole`: it shows the whole
-/// strip, not only the bands about its long edges), or none when estimating
-/// is off.
-fn resolve_distortion<'a>(
-    opts: &MeasureOptions,
-    roi: &[Point; 4],
-    target: Option<&Target>,
-    size: (usize, usize),
-    whole: bool,
-    luma: impl Fn(&[Point; 4]) -> Box<dyn lens_fit::Sampler + 'a>,
-) -> Result<Option<DistortionFound>, Failure> {
-    if opts.distortion.is_some() {
-        return given_distortion(opts, roi, size.0, size.1);
-    }
-    if !opts.estimate_distortion {
-        return Ok(None);
-    }
-    let Some(t) = target else {
-        let plane = luma(roi);
-        let mut d = lens_fit::estimate(&*plane, roi, size.0, size.1);
-        // The refinement fitted straight lines to the long edges and turned
-        // the ends along bars the lens bends; where a lens model is used, the
-        // corners as given go onto the edges seen through it instead.
-        let given = opts.roi.unwrap_or(*roi);
-        if opts.refine_roi {
-            d.snapped = lens_fit::snap_to_edges(
-                &d,
-                whole.then_some(&*plane),
-                &given,
-                size.0,
-                size.1,
-                2.0 * REFINE_SEARCH_PX + d.bow_px,
-            );
-        }
-        return Ok(Some(d));
-    };
-    // Before, a target's strips were binned as if straight: a 3.6 % pincushion
-    // put MTF50 29 % low on one strip and 5 % high on another. The strips are
-    // tried in the target's order until one's edges give a clear answer
-    // (a model used, or edges found all along and no distortion in them).
-    let mut tried: Vec<DistortionFound> = Vec::new();
-    for q in region::target_strip_quads(t, roi)? {
-        let d = lens_fit::estimate(&*luma(&q), &q, size.0, size.1);
-        let clear = d.used().is_some()
-            || d.edge_coverage
-                .is_some_and(|c| c >= lens_fit::MIN_EDGE_COVERAGE);
-        if clear {
-            return Ok(Some(d));
-        }
-        tried.push(d);
-    }
-    Ok(tried.into_iter().max_by_key(|d| d.edge_points))
-}
-
 /// [`measure_planes`] with the distortion already resolved and what the
 /// planes' coding leaves for the strips to take out ([`strip::Coding`]).
 #[allow(clippy::too_many_arguments)]
@@ -499,75 +428,20 @@ fn measure_planes_lens(
         for r in measured {
             let (c, note) = r?;
             notes.extend(note);
-            if let Some(line) = frequency::foreshortening_note(&c, opts.margin) {
-                notes.push(format!("{name}/{}: {line}", c.sweep_id));
-            }
-            if let Some(line) = sweep_end::note(&c.print_ends_inside_px) {
-                notes.push(format!("{name}/{}: {line}", c.sweep_id));
-            }
-            if c.clipped_fraction > 0.0 {
-                warnings.push(format!(
-                    "{name}/{}: {:.2} % of the region's samples are clipped",
-                    c.sweep_id,
-                    100.0 * c.clipped_fraction
-                ));
-            }
-            // A used correction is needed; one needed but unused is a warning.
-            if let Some(f) = &c.tone_fix
-                && f.needed()
-            {
-                let line = format!("{name}/{}: {}", c.sweep_id, f.describe());
-                if f.used {
-                    notes.push(line);
-                } else {
-                    warnings.push(line);
-                }
-                if let Some(b) = &f.black
-                    && (b.used || f.light_ratio > sine_tone::MAX_EVEN_LIGHT)
-                {
-                    notes.push(format!("{name}/{}: {}", c.sweep_id, b.describe()));
-                }
-                if f.uneven_light() {
-                    warnings.push(format!(
-                        "{name}/{}: {}",
-                        c.sweep_id,
-                        f.uneven_light_warning()
-                    ));
-                }
-            }
-            if coding.block_ripple {
-                let drift = block_ripple::bar_drift_px(&c);
-                if drift < block_ripple::SQUARE_DRIFT_PX {
-                    square.push((format!("{name}/{}", c.sweep_id), drift));
-                }
-            }
-            if let Some(f) = c.rounded_away_from_cy_px {
-                warnings.push(jpeg_deadzone::rounded_away_warning(
-                    &format!("{name}/{}", c.sweep_id),
-                    f,
-                ));
-            }
-            if c.chart_modulation_source.starts_with("extrapolated") {
-                warnings.push(format!(
-                    "{name}/{}: chart modulation {:.4} {}",
-                    c.sweep_id, c.chart_modulation, c.chart_modulation_source
-                ));
-            }
+            curve_said::of_curve(
+                name,
+                &c,
+                opts,
+                coding,
+                &mut notes,
+                &mut warnings,
+                &mut square,
+            );
             curves.push(c);
         }
         patch_rows.extend(patched?);
     }
-    if !square.is_empty() {
-        let names: Vec<&str> = square.iter().map(|s| s.0.as_str()).collect();
-        let drift = square.iter().map(|s| s.1).fold(0.0, f64::max);
-        warnings.push(format!(
-            "{}: the bars lie square to the JPEG's 8×8 blocks (they drift ≤ {drift:.2} px across \
-             the strip at an end), so its quantisation error is not averaged along them (simulated q75: \
-             MTF50 off by up to ±2.5 % and the chart modulation by up to +1.1 %, against ±1.1 % \
-             and 0.45 % turned 0.1–5°); turn the chart by 1–5°",
-            names.join(", ")
-        ));
-    }
+    warnings.extend(curve_said::square_to_blocks(&square));
     if curves.is_empty() && patch_rows.is_empty() {
         return Err(Failure::Options(
             "the target describes neither sweeps nor sine patches".into(),

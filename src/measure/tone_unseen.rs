@@ -416,6 +416,19 @@ mod tests {
         // the chart modulation with them; the larger change is its share.
         assert!((share - m_chart * 0.25).abs() < 1e-9, "{share}");
         assert!(pts.iter().all(|p| (p.mtf_err - 0.001).abs() < 1e-9));
+        // An offset as large as the mean or larger (no light left) is capped
+        // at a scale of 1/MIN_LEFT, not divided by zero or turned negative.
+        for eps in [1.0, 3.0, 1e6] {
+            let mut big = pts.clone();
+            let share = widen(&mut big, &[], &prof, &law, eps, m_chart, |p, _| {
+                two_point(p)
+            });
+            assert!(
+                (share - m_chart * (1.0 / MIN_LEFT - 1.0)).abs() < 1e-9,
+                "{eps}: {share}"
+            );
+            assert!(big.iter().all(|p| p.mtf_err.is_finite()), "{big:?}");
+        }
         // No profile, no chart modulation, a dark profile: left as they are.
         let dark = profile((0..10).map(f64::from).collect(), vec![0.0; 10]);
         assert_eq!(
