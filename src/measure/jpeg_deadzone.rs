@@ -212,8 +212,9 @@ const ROUNDED_AWAY: f64 = 0.5;
 /// Adds to each point's uncertainty (modulation units, before the chart
 /// modulation divides it) the error the JPEG's luma quantiser `table`
 /// leaves there, and marks the point `jpeg_limited` where that error is
-/// larger than the rest of its uncertainty or its sine is rounded away; `sine_at` gives a point's sine in the photo, None where
-/// its codes are not known. Returns the frequency (cycles/pixel) from which
+/// larger than the rest of its uncertainty or its sine is rounded away;
+/// `sine_at` gives a point's sine in the photo, None where its codes are
+/// not known. Returns the frequency (cycles/pixel) from which
 /// every non-aliased point to the curve's end reads its sine rounded away
 /// (within [`ROUNDED_AWAY`] dead zones of nothing), if the last one does.
 pub(super) fn widen(

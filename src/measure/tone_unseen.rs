@@ -86,8 +86,8 @@ pub fn seen_weakly(fix: &ToneFix) -> bool {
 /// (independent camera, `camera` seed 83 #12, a vignette at the low end,
 /// light 1.5:1, eps 0.30: at 0.15 cy/px the MTF moves −3.4 % for +eps and
 /// +16 % for −eps; it read 7.5 % low, claiming ±2.4 % from +eps to first
-/// order, MTF50 |z| 2.3, points up to 13.9). Nothing is widened where the chart modulation
-/// cannot be taken again for either sign.
+/// order, MTF50 |z| 2.3, points up to 13.9). Nothing is widened where the
+/// chart modulation cannot be taken again for either sign.
 pub(super) fn widen(
     points: &mut [MtfPoint],
     low: &[MtfPoint],
