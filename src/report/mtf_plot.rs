@@ -213,23 +213,15 @@ where
             .iter()
             .filter(|p| p.aliased && p.freq_cy_px <= xmax)
             .collect();
-        if !aliased.is_empty() {
-            let dots = chart
-                .draw_series(aliased.iter().map(|p| {
-                    Circle::new(
-                        (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
-                        2,
-                        RGBColor(160, 160, 160).filled(),
-                    )
-                }))
-                .map_err(err)?;
-            // One legend entry for the grey dots of every curve.
-            if !aliased_in_legend {
-                aliased_in_legend = true;
-                dots.label("aliased (not MTF)")
-                    .legend(|(x, y)| Circle::new((x + 9, y), 3, RGBColor(160, 160, 160).filled()));
-            }
-        }
+        // One legend entry for the grey dots of every curve.
+        let grey = RGBColor(160, 160, 160).filled();
+        let dots = PointMarks {
+            radius: 2,
+            style: grey,
+            label: "aliased (not MTF)",
+            legend: grey,
+        };
+        draw_point_marks(&mut chart, &aliased, ymax, &dots, &mut aliased_in_legend)?;
     }
     for (k, c) in m.curves.iter().enumerate() {
         let col = colours[k];
@@ -283,25 +275,16 @@ where
         // a hollow ring in the curve's colour, one legend entry for all curves.
         let limited: Vec<_> = good
             .iter()
+            .copied()
             .filter(|p| p.jpeg_limited && p.freq_cy_px <= xmax)
             .collect();
-        if !limited.is_empty() {
-            let rings = chart
-                .draw_series(limited.iter().map(|p| {
-                    Circle::new(
-                        (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
-                        3,
-                        col.stroke_width(1),
-                    )
-                }))
-                .map_err(err)?;
-            if !limited_in_legend {
-                limited_in_legend = true;
-                rings
-                    .label("JPEG-limited (the file's, not the lens's)")
-                    .legend(|(x, y)| Circle::new((x + 9, y), 3, BLACK.stroke_width(1)));
-            }
-        }
+        let rings = PointMarks {
+            radius: 3,
+            style: col.stroke_width(1),
+            label: "JPEG-limited (the file's, not the lens's)",
+            legend: BLACK.stroke_width(1),
+        };
+        draw_point_marks(&mut chart, &limited, ymax, &rings, &mut limited_in_legend)?;
     }
     super::model_overlay::draw_model_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
     super::model_overlay::draw_lens_curves(&mut chart, extras, xmax, ymax).map_err(err)?;
@@ -484,6 +467,53 @@ const MTF50P_MARK_MIN: f64 = 0.002;
 
 /// With a sharpening peak: an open circle at the peak, and a filled diamond at
 /// (MTF50P, half the peak) with its label above, when MTF50P differs from MTF50.
+/// How [`draw_point_marks`] marks points: circles of `radius` px in `style`,
+/// listed once in the legend as `label` with a 3-px circle in `legend`.
+struct PointMarks {
+    radius: i32,
+    style: ShapeStyle,
+    label: &'static str,
+    legend: ShapeStyle,
+}
+
+/// Marks `points` as `marks` says (their MTF clamped to 0–`ymax`), and gives
+/// them the legend entry unless `in_legend` says an earlier curve did.
+fn draw_point_marks<DB: DrawingBackend>(
+    chart: &mut ChartContext<
+        '_,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    points: &[&crate::measure::MtfPoint],
+    ymax: f64,
+    marks: &PointMarks,
+    in_legend: &mut bool,
+) -> Result<(), ReportError>
+where
+    DB::ErrorType: 'static,
+{
+    if points.is_empty() {
+        return Ok(());
+    }
+    let drawn = chart
+        .draw_series(points.iter().map(|p| {
+            Circle::new(
+                (p.freq_cy_px, p.mtf.clamp(0.0, ymax)),
+                marks.radius,
+                marks.style,
+            )
+        }))
+        .map_err(err)?;
+    if !*in_legend {
+        *in_legend = true;
+        let legend = marks.legend;
+        drawn
+            .label(marks.label)
+            .legend(move |(x, y)| Circle::new((x + 9, y), 3, legend));
+    }
+    Ok(())
+}
+
 fn draw_peak_marks<DB: DrawingBackend>(
     chart: &mut ChartContext<
         '_,
